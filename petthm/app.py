@@ -1,0 +1,207 @@
+"""The run lifecycle: options -> mesh -> set-up -> time loop -> output.
+
+Each phase is a PETSc log stage (``-log_view`` shows mesh, setup, solve,
+output; the residual and Jacobian assembly are the events ``thm.residual``
+and ``thm.jacobian``).  Rank 0 prints one progress line per step and writes
+``summary.json``, ``history.csv`` and the XDMF/HDF5 fields.
+"""
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import numpy as np
+from petsc4py import PETSc
+
+from . import __version__, compat, params as P
+from .errors import InputError
+from .fields import Discretisation
+from .mesh import Mesh, distribute, label_boundaries, read_plex
+from .output import FieldWriter, History, write_summary
+from .scenes.base import REGISTRY
+from .solver import Problem, StepControl, TimeStepper, propose_defaults, SOLVER_DEFAULTS
+
+#: options PETSc reads only at finalize or start-up; never "unused"
+_LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
+                 "memory_view", "log_", "on_error", "no_signal_handler", "fp_trap",
+                 "check_pointer_intensity", "viewer_binary", "history", "options_monitor", "mpi_")
+
+
+def _say(comm, msg):
+    if comm.rank == 0:
+        print(msg, flush=True)
+
+
+def check_unused_petsc_options() -> None:
+    """Raise InputError naming the first option nothing has read (a misspelling)."""
+    from .solver import PROPOSED
+    left = [o for o in compat.unused_options()
+            if not o.startswith(_LATE_OPTIONS) and o not in PROPOSED]
+    if left:
+        raise InputError(f"option -{left[0]} was not used by any solver or petthm component "
+                         "(misspelt, or not valid for this scene)")
+
+
+def make_scene(name: str):
+    from .scenes import load_all
+    load_all()
+    if name not in REGISTRY:
+        raise InputError(f"unknown scene '{name}'; scenes: {', '.join(sorted(REGISTRY))}")
+    cls = REGISTRY[name]
+    run = P.read(P.RunParams)
+    values = {c: P.read(c) for c in cls.parameter_sets}
+    P.check_unknown_thm_options((P.RunParams,) + tuple(cls.parameter_sets))
+    return cls(run, values)
+
+
+class Run:
+    """One simulation of a scene (collective on PETSc.COMM_WORLD)."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.comm = PETSc.COMM_WORLD
+        self.mpi = self.comm.tompi4py()
+        run = scene.run
+        self.outdir = run.output_dir or os.path.join("output", scene.name)
+        self.stage_wall = {}
+        self.t_start = time.perf_counter()
+
+    # -- phases ----------------------------------------------------------------
+    def _stage(self, name):
+        st = PETSc.Log.Stage(name)
+        st.push()
+        return st, time.perf_counter()
+
+    def _pop(self, name, st, t0):
+        st.pop()
+        self.stage_wall[name] = self.stage_wall.get(name, 0.0) + time.perf_counter() - t0
+
+    def build_mesh(self) -> Mesh:
+        scene, run = self.scene, self.scene.run
+        st, t0 = self._stage("mesh")
+        if self.comm.rank == 0:
+            os.makedirs(self.outdir, exist_ok=True)
+        path = run.mesh_file
+        if not path:
+            path = os.path.join(self.outdir, "mesh.msh")
+            size = run.mesh_size or scene.time.mesh_size
+            if self.comm.rank == 0:
+                scene.generate_mesh(path, size)
+            self.mpi.barrier()
+        dm = read_plex(path, self.comm)
+        label_boundaries(dm, scene.boundaries())
+        dm = distribute(dm)
+        mesh = Mesh(dm)
+        self._pop("mesh", st, t0)
+        return mesh
+
+    def setup(self, mesh: Mesh):
+        scene, run = self.scene, self.scene.run
+        st, t0 = self._stage("setup")
+        model, dirichlet, scales, initial = scene.build(mesh, run.fe_degree)
+        bcs = {}
+        for d in dirichlet:
+            bcs.setdefault(d.field, []).append(d.boundary)
+        disc = Discretisation(mesh, model.fields, bcs)
+        problem = Problem(disc, model, scales, dirichlet, run.quadrature_degree or None)
+        problem.set_initial(initial)
+        td = scene.time
+        control = StepControl(final_time=run.final_time or td.final_time,
+                              dt_initial=run.dt_initial or td.dt_initial,
+                              growth=run.dt_growth or td.dt_growth,
+                              dt_max=run.dt_max or td.dt_max)
+        rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
+        propose_defaults(SOLVER_DEFAULTS)
+        self._pop("setup", st, t0)
+        return disc, problem, control, rs
+
+    def execute(self) -> dict:
+        scene, run = self.scene, self.scene.run
+        comm = self.comm
+        mesh = self.build_mesh()
+        disc, problem, control, rscales = self.setup(mesh)
+        sizes = disc.global_sizes()
+        _say(comm, f"petthm {__version__} | scene {scene.name} | {comm.size} rank(s) | "
+             f"{mesh.global_cell_count()} cells | P{run.fe_degree} | dofs "
+             + ", ".join(f"{k}={v}" for k, v in sizes.items()))
+        _say(comm, "scales: " + ", ".join(
+            f"{k}: x = {problem.scales[k].offset:g} + {problem.scales[k].scale:g} x_hat, "
+            f"residual / {rscales[k]:.3e}" for k in sizes))
+
+        st, t0 = self._stage("output")
+        writer = FieldWriter(disc, self.outdir, disc.fields[0].degree)
+        columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(scene.history_columns)
+        history = History(os.path.join(self.outdir, "history.csv"), columns, comm.rank)
+        self._pop("output", st, t0)
+        interval = run.output_interval or scene.time.output_interval
+        stepper = None
+        state = {"its": (0, 0), "wall": time.perf_counter(), "last_t": 0.0}
+
+        def write_fields(t):
+            s, t1 = self._stage("output")
+            writer.write(t - 0.0, {f.name: self._si_out(problem, f.name, t) for f in disc.fields})
+            self._pop("output", s, t1)
+
+        def monitor(step, t, X):
+            snes_its, ksp_its = stepper.iterations() if stepper else (0, 0)
+            dn, dk = snes_its - state["its"][0], ksp_its - state["its"][1]
+            state["its"] = (snes_its, ksp_its)
+            dt = t - state["last_t"]
+            state["last_t"] = t
+            wall = time.perf_counter() - self.t_start
+            row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk, "wall": wall}
+            row.update(scene.monitors(problem, t))
+            history.write(row)
+            if step == 1:
+                check_unused_petsc_options()
+            if step % interval == 0 or t >= control.final_time * (1 - 1e-12):
+                write_fields(t)
+            if not run.quiet and step > 0:
+                frac = t / control.final_time
+                solve_wall = time.perf_counter() - state["wall"]
+                eta = solve_wall * (1 - frac) / frac if frac > 0 else math.nan
+                _say(comm, f"step {step:5d}  t = {t:.4e} s  dt = {dt:.3e} s  newton {dn:2d}  "
+                     f"krylov {dk:4d}  {100 * frac:5.1f} %  left ~{eta:7.1f} s")
+
+        stepper = TimeStepper(problem, control, monitor)
+        st, t0 = self._stage("solve")
+        state["wall"] = time.perf_counter()
+        reason = stepper.solve()
+        self._pop("solve", st, t0)
+        t_final = stepper.ts.getTime()
+        status = "completed" if reason > 0 else "failed"
+        summary = {
+            "scene": scene.name, "status": status,
+            "reason": str(reason) + ("" if reason > 0 else " (TS diverged; last accepted state saved)"),
+            "petthm_version": __version__, "petsc_version": compat.version_string(),
+            "petsc4py_version": __import__("petsc4py").__version__,
+            "ranks": comm.size, "cells": mesh.global_cell_count(), "fe_degree": run.fe_degree,
+            "fields": [f.name for f in disc.fields], "dofs": sizes,
+            "steps": stepper.ts.getStepNumber(), "rejected_steps": stepper.rejected,
+            "snes_iterations": stepper.iterations()[0], "ksp_iterations": stepper.iterations()[1],
+            "final_time": t_final,
+        }
+        st, t0 = self._stage("output")
+        summary.update(scene.report(problem, t_final))
+        if status == "failed":
+            write_fields(t_final)
+        history.close()
+        self._pop("output", st, t0)
+        summary["wall_time"] = dict(self.stage_wall, total=time.perf_counter() - self.t_start)
+        write_summary(os.path.join(self.outdir, "summary.json"), summary, comm.rank)
+        _say(comm, f"{status}: t = {t_final:.4e} s in {summary['steps']} steps "
+             f"({summary['rejected_steps']} rejected), {summary['wall_time']['total']:.2f} s; "
+             f"output in {self.outdir}")
+        self.problem = problem
+        return summary
+
+    @staticmethod
+    def _si_out(problem, name, t):
+        v = problem.field_values(name, t=t)
+        return v - P.CELSIUS if name.startswith("T") else v
+
+
+def run_scene(name: str) -> dict:
+    scene = make_scene(name)
+    return Run(scene).execute()

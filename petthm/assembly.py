@@ -1,0 +1,371 @@
+"""Generic vectorised finite-element assembly (no physics in here).
+
+For a batch of cells the local solution is gathered with fancy indexing,
+field values/gradients at the quadrature points are formed with matrix
+products against the tabulated reference basis, the model's kernels are
+called once per batch, and the results are contracted back:
+
+    r_i  = sum_q w_q |J| ( phi_i f0 + grad phi_i . f1 )
+    K_ij = sum_q w_q |J| ( phi_i g0 phi_j + phi_i g1 . grad phi_j
+                           + grad phi_i . g2 phi_j + grad phi_i . g3 . grad phi_j
+                           + grad phi_i . g2_lap lap phi_j )
+
+Physical gradients are mapped to the reference cell (J^-1), so every
+contraction is one BLAS matrix product with a tensor of the reference basis.
+The Jacobian's COO pattern is fixed at set-up; each re-assembly only
+computes the value array and calls MatSetValuesCOO.
+
+Scaling: unknowns are stored as x_hat = (x - offset)/scale per field and
+residual rows are divided by a per-field reference ``rscale`` so that
+solver tolerances are dimensionless.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from petsc4py import PETSc
+
+from . import compat, fe
+from .fields import Discretisation
+from .model import Model
+
+CHUNK = 16384
+
+
+@dataclass
+class FieldScale:
+    """x_SI = offset + scale * x_hat; residual rows divided by rscale."""
+    scale: float = 1.0
+    offset: float = 0.0
+    rscale: float = 1.0
+
+
+class _Tab:
+    """Reference tabulation of one element degree on one rule."""
+
+    def __init__(self, dim, degree, points):
+        t = fe.tabulate(dim, degree, points)
+        self.phi, self.dphi, self.hess = t.phi, t.dphi, t.hess
+        nq, nb = t.phi.shape
+        # D[q*d+k, i] = dphi[q, i, k]
+        self.D = np.ascontiguousarray(t.dphi.transpose(0, 2, 1).reshape(nq * dim, nb))
+
+
+class CellContext:
+    """Fields at the quadrature points of a batch of cells (SI units).
+
+    ``value(f)`` (nc, nq, ncomp), ``grad(f)`` (nc, nq, ncomp, dim),
+    ``dot(f)`` time derivative values, ``lap(f)`` (nc, 1, ncomp) Laplacian
+    (constant per cell for P1/P2 on affine cells); ``x`` (nc, nq, dim)
+    physical points, ``h`` (nc, 1) cell size, ``t`` time, ``shift`` the
+    d(x_dot)/dx of the time integrator.
+    """
+
+    def __init__(self, asm: "Assembler", cells: slice, xl, xdl, t, shift=0.0):
+        self._asm, self._cells, self._xl, self._xdl = asm, cells, xl, xdl
+        self.t, self.shift = t, shift
+        m = asm.mesh
+        self.dim = m.dim
+        self.Jinv = m.Jinv[cells]
+        self.h = m.h[cells][:, None]
+        self.x = m.x0[cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[cells], asm.rule.points)
+        self._cache = {}
+
+    def _nodal(self, name, dot=False):
+        key = ("n", name, dot)
+        if key not in self._cache:
+            a = self._asm
+            f = a.disc.field(name)
+            sc = a.scales[name]
+            src = self._xdl if dot else self._xl
+            v = src[a.disc.elem_dofs[name][self._cells]] * sc.scale
+            if not dot:
+                v = v + sc.offset
+            self._cache[key] = v.reshape(v.shape[0], -1, f.ncomp)
+        return self._cache[key]
+
+    def value(self, name):
+        key = ("v", name)
+        if key not in self._cache:
+            self._cache[key] = self._asm.tab(name).phi @ self._nodal(name)
+        return self._cache[key]
+
+    def dot(self, name):
+        key = ("d", name)
+        if key not in self._cache:
+            self._cache[key] = self._asm.tab(name).phi @ self._nodal(name, dot=True)
+        return self._cache[key]
+
+    def grad(self, name):
+        key = ("g", name)
+        if key not in self._cache:
+            tab = self._asm.tab(name)
+            X = self._nodal(name)
+            nc, nq, d = X.shape[0], tab.phi.shape[0], self.dim
+            G = (tab.D @ X).reshape(nc, nq, d, -1)                   # (nc, nq, k, m)
+            self._cache[key] = np.einsum("cqkm,cka->cqma", G, self.Jinv)
+        return self._cache[key]
+
+    def lap(self, name):
+        key = ("l", name)
+        if key not in self._cache:
+            lapb = self._asm.basis_laplacian(name, self._cells)         # (nc, nb)
+            self._cache[key] = np.einsum("ci,cim->cm", lapb, self._nodal(name))[:, None, :]
+        return self._cache[key]
+
+
+class FacetContext(CellContext):
+    """Fields at the quadrature points of boundary facets (same API) plus ``n``."""
+
+    def __init__(self, asm, fb: "_FacetBatch", xl, xdl, t, shift=0.0):
+        self._asm, self._cells, self._xl, self._xdl = asm, fb.cells, xl, xdl
+        self.t, self.shift = t, shift
+        m = asm.mesh
+        self.dim = m.dim
+        self.Jinv = m.Jinv[fb.cells]
+        self.h = m.h[fb.cells][:, None]
+        self.x = m.x0[fb.cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[fb.cells], fb.points)
+        self.n = np.broadcast_to(fb.normals[:, None, :], self.x.shape)
+        self._fb = fb
+        self._cache = {}
+
+    def value(self, name):
+        key = ("v", name)
+        if key not in self._cache:
+            self._cache[key] = self._fb.tabs[self._asm.disc.field(name).degree].phi @ self._nodal(name)
+        return self._cache[key]
+
+    def dot(self, name):
+        key = ("d", name)
+        if key not in self._cache:
+            self._cache[key] = self._fb.tabs[self._asm.disc.field(name).degree].phi @ \
+                self._nodal(name, dot=True)
+        return self._cache[key]
+
+    def grad(self, name):  # pragma: no cover - not needed by the present facet terms
+        raise NotImplementedError("facet kernels receive values only")
+
+
+@dataclass
+class _FacetBatch:
+    """Boundary facets that share the local facet number within their cell."""
+    cells: np.ndarray
+    points: np.ndarray            # reference-cell points of the facet rule (nq, d)
+    weights: np.ndarray           # (nf, nq) physical weights
+    normals: np.ndarray           # (nf, d)
+    tabs: dict
+
+
+class Assembler:
+    """Residual and Jacobian of a ``Model`` on a ``Discretisation``."""
+
+    def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
+                 quad_degree: int | None = None):
+        self.disc, self.model, self.mesh = disc, model, disc.mesh
+        self.scales = scales
+        dim = self.mesh.dim
+        pmax = max(f.degree for f in disc.fields)
+        self.rule = fe.rule(dim, quad_degree or 2 * pmax)
+        self._tabs = {p: _Tab(dim, p, self.rule.points) for p in (1, 2)}
+        self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
+        self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in model.facets}
+        self._build_pattern()
+
+    # -- tabulations ----------------------------------------------------------
+    def tab(self, name) -> _Tab:
+        return self._tabs[self.disc.field(name).degree]
+
+    def basis_laplacian(self, name, cells) -> np.ndarray:
+        """Laplacian of every basis function on each cell, (nc, nb)."""
+        Jinv = self.mesh.Jinv[cells]
+        M = np.einsum("cka,cla->ckl", Jinv, Jinv)
+        return np.einsum("ikl,ckl->ci", self.tab(name).hess, M)
+
+    def _facet_batches(self, boundary, degree):
+        m = self.mesh
+        cells, local, measure = m.boundary_facets(boundary)
+        frule = fe.rule(m.dim - 1, degree)
+        normals = m.outward_normals(cells, local) if len(cells) else np.zeros((0, m.dim))
+        batches = []
+        for f in range(m.dim + 1):
+            sel = local == f
+            if not sel.any():
+                continue
+            pts = fe.facet_points(m.dim, f, frule.points)
+            w = measure[sel, None] * frule.weights[None, :] / fe.REFERENCE_VOLUME[m.dim - 1]
+            tabs = {p: _Tab(m.dim, p, pts) for p in (1, 2)}
+            batches.append(_FacetBatch(cells[sel], pts, w, normals[sel], tabs))
+        return batches
+
+    # -- COO pattern ----------------------------------------------------------
+    def _block_index(self, test, trial, cells):
+        g = self.disc.global_index
+        rows = g[self.disc.elem_dofs[test][cells]]
+        cols = g[self.disc.elem_dofs[trial][cells]]
+        R = np.broadcast_to(rows[:, :, None], (len(rows), rows.shape[1], cols.shape[1]))
+        C = np.broadcast_to(cols[:, None, :], R.shape)
+        return R.ravel(), C.ravel()
+
+    def _build_pattern(self):
+        rows, cols = [], []
+        allcells = np.arange(self.mesh.ncells)
+        for jb in self.model.jacobians:
+            r, c = self._block_index(jb.test, jb.trial, allcells)
+            rows.append(r)
+            cols.append(c)
+        for ft in self.model.facets:
+            if ft.g0 is None:
+                continue
+            for fb in self._facets[ft.boundary]:
+                r, c = self._block_index(ft.field, ft.field, fb.cells)
+                rows.append(r)
+                cols.append(c)
+        rows = np.concatenate(rows) if rows else np.zeros(0, compat.INT)
+        cols = np.concatenate(cols) if cols else np.zeros(0, compat.INT)
+        self._keep = (rows >= 0) & (cols >= 0)
+        self.coo_rows = rows[self._keep]
+        self.coo_cols = cols[self._keep]
+        self._all_kept = bool(self._keep.all())
+
+    def create_matrix(self) -> PETSc.Mat:
+        """An AIJ matrix with the DM's layout and this assembler's COO pattern."""
+        A = self.mesh.dm.createMatrix()
+        compat.coo_preallocate(A, self.coo_rows, self.coo_cols)
+        return A
+
+    # -- residual -------------------------------------------------------------
+    def _chunks(self):
+        n = self.mesh.ncells
+        for s in range(0, n, CHUNK):
+            yield slice(s, min(n, s + CHUNK))
+
+    def residual(self, xl: np.ndarray, xdl: np.ndarray, t: float) -> np.ndarray:
+        """Local residual vector (scaled) from local solution and its time derivative."""
+        out = np.zeros(self.disc.nlocal)
+        d = self.mesh.dim
+        for cells in self._chunks():
+            ctx = CellContext(self, cells, xl, xdl, t)
+            W = self.W[cells]
+            nc = W.shape[0]
+            for term in self.model.residuals:
+                tab = self.tab(term.field)
+                r = 0.0
+                if term.f0 is not None:
+                    r = tab.phi.T @ (W[:, :, None] * term.f0(ctx))          # (nc, nb, m)
+                if term.f1 is not None:
+                    f1 = term.f1(ctx)                                       # (nc, nq, m, d)
+                    f1ref = np.einsum("cka,cqma->cqkm", ctx.Jinv, W[:, :, None, None] * f1)
+                    r = r + tab.D.T @ f1ref.reshape(nc, -1, f1.shape[2])
+                self._scatter(out, term.field, cells, r)
+        for ft in self.model.facets:
+            for fb in self._facets[ft.boundary]:
+                ctx = FacetContext(self, fb, xl, xdl, t)
+                tab = fb.tabs[self.disc.field(ft.field).degree]
+                r = tab.phi.T @ (fb.weights[:, :, None] * ft.f0(ctx))
+                self._scatter(out, ft.field, fb.cells, r)
+        return out
+
+    def _scatter(self, out, name, cells, r):
+        idx = self.disc.elem_dofs[name][cells].ravel()
+        out += np.bincount(idx, weights=np.ravel(r) / self.scales[name].rscale, minlength=out.size)
+
+    # -- Jacobian -------------------------------------------------------------
+    def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
+        """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot."""
+        vals = []
+        for jb in self.model.jacobians:
+            parts = []
+            for cells in self._chunks():
+                ctx = CellContext(self, cells, xl, xdl, t, shift)
+                parts.append(self._cell_block(jb, ctx, cells).ravel())
+            if not parts:
+                continue
+            vals.append(np.concatenate(parts) *
+                        (self.scales[jb.trial].scale / self.scales[jb.test].rscale))
+        for ft in self.model.facets:
+            if ft.g0 is None:
+                continue
+            sc = self.scales[ft.field]
+            for fb in self._facets[ft.boundary]:
+                ctx = FacetContext(self, fb, xl, xdl, t, shift)
+                phi = fb.tabs[self.disc.field(ft.field).degree].phi
+                K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi)
+                vals.append(K.ravel() * (sc.scale / sc.rscale))
+        v = np.concatenate(vals) if vals else np.zeros(0)
+        return v if self._all_kept else v[self._keep]
+
+    @staticmethod
+    def _mass_like(g0w, phiF, phiG):
+        """sum_q phiF_i g0w[a,b] phiG_j -> (nc, nbF, m, nbG, n)."""
+        nc, nq, m, n = g0w.shape
+        M0 = (phiF[:, :, None] * phiG[:, None, :]).reshape(nq, -1)
+        K = g0w.transpose(0, 2, 3, 1).reshape(nc * m * n, nq) @ M0
+        return K.reshape(nc, m, n, phiF.shape[1], phiG.shape[1]).transpose(0, 3, 1, 4, 2)
+
+    def _cell_block(self, jb, ctx, cells):
+        tF, tG = self.tab(jb.test), self.tab(jb.trial)
+        W = self.W[cells]
+        Jinv = ctx.Jinv
+        nc = W.shape[0]
+        nbF, nbG = tF.phi.shape[1], tG.phi.shape[1]
+        m, n = self.disc.field(jb.test).ncomp, self.disc.field(jb.trial).ncomp
+        nq, d = W.shape[1], self.mesh.dim
+        K = np.zeros((nc, m, n, nbF, nbG))
+        if jb.g0 is not None:
+            g = W[:, :, None, None] * np.broadcast_to(jb.g0(ctx), (nc, nq, m, n))
+            M0 = (tF.phi[:, :, None] * tG.phi[:, None, :]).reshape(nq, -1)
+            K += (g.transpose(0, 2, 3, 1).reshape(nc * m * n, nq) @ M0).reshape(K.shape)
+        if jb.g1 is not None:
+            g = np.einsum("cqabe,cle->cabql", np.broadcast_to(jb.g1(ctx), (nc, nq, m, n, d)),
+                          Jinv) * W[:, None, None, :, None]
+            M1 = (tF.phi[:, None, :, None] * tG.dphi.transpose(0, 2, 1)[:, :, None, :]).reshape(nq * d, -1)
+            K += (g.reshape(nc * m * n, nq * d) @ M1).reshape(K.shape)
+        if jb.g2 is not None or jb.g2_lap is not None:
+            D2 = tF.dphi.transpose(0, 2, 1)                                   # (nq, d, nbF)
+            if jb.g2 is not None:
+                g = np.einsum("cqaeb,cke->cabqk", np.broadcast_to(jb.g2(ctx), (nc, nq, m, d, n)),
+                              Jinv) * W[:, None, None, :, None]
+                M2 = (D2[:, :, :, None] * tG.phi[:, None, None, :]).reshape(nq * d, -1)
+                K += (g.reshape(nc * m * n, nq * d) @ M2).reshape(K.shape)
+            if jb.g2_lap is not None:
+                g = np.einsum("cqaeb,cke->cabqk", np.broadcast_to(jb.g2_lap(ctx), (nc, nq, m, d, n)),
+                              Jinv) * W[:, None, None, :, None]
+                T = (g.reshape(nc * m * n, nq * d) @ D2.reshape(nq * d, nbF)).reshape(nc, m, n, nbF)
+                lap = self.basis_laplacian(jb.trial, cells)                 # (nc, nbG)
+                K += T[..., None] * lap[:, None, None, None, :]
+        if jb.g3 is not None:
+            g3 = np.broadcast_to(jb.g3(ctx), (nc, nq, m, d, n, d))
+            if m == 1 and n == 1:
+                g = np.einsum("cke,cqef,clf->cqkl", Jinv, g3[:, :, 0, :, 0, :], Jinv) * W[:, :, None, None]
+            else:
+                g = np.einsum("cke,cqaebf,clf->cabqkl", Jinv, g3, Jinv) * W[:, None, None, :, None, None]
+            M3 = np.einsum("qik,qjl->qklij", tF.dphi, tG.dphi).reshape(nq * d * d, -1)
+            K += (g.reshape(nc * m * n, nq * d * d) @ M3).reshape(K.shape)
+        return K.transpose(0, 3, 1, 4, 2)                                   # (nc, nbF, m, nbG, n)
+
+    # -- functionals ------------------------------------------------------------
+    def error_norms(self, xl, name: str, exact: Callable, exact_grad: Callable, t: float,
+                    degree: int = 6) -> dict[str, float]:
+        """Global L2 and H1-seminorm errors and norms of the exact field (SI)."""
+        m, f = self.mesh, self.disc.field(name)
+        rule = fe.rule(m.dim, max(degree, 2 * f.degree + 2))
+        tab = _Tab(m.dim, f.degree, rule.points)
+        sc = self.scales[name]
+        acc = np.zeros(4)
+        for cells in self._chunks():
+            X = xl[self.disc.elem_dofs[name][cells]].reshape(-1, tab.phi.shape[1], f.ncomp) * sc.scale + sc.offset
+            x = m.x0[cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[cells], rule.points)
+            W = np.abs(m.detJ[cells])[:, None] * rule.weights
+            u = tab.phi @ X
+            G = np.einsum("cqkm,cka->cqma", (tab.D @ X).reshape(len(X), -1, m.dim, f.ncomp), m.Jinv[cells])
+            ue = np.asarray(exact(x, t)).reshape(u.shape)
+            ge = np.asarray(exact_grad(x, t)).reshape(G.shape)
+            acc += [np.sum(W[:, :, None] * (u - ue) ** 2), np.sum(W[:, :, None] * ue ** 2),
+                    np.sum(W[:, :, None, None] * (G - ge) ** 2), np.sum(W[:, :, None, None] * ge ** 2)]
+        acc = m.dm.comm.tompi4py().allreduce(acc)
+        return {"l2": float(np.sqrt(acc[0])), "l2_exact": float(np.sqrt(acc[1])),
+                "h1": float(np.sqrt(acc[2])), "h1_exact": float(np.sqrt(acc[3])),
+                "l2_rel": float(np.sqrt(acc[0] / max(acc[1], 1e-300))),
+                "h1_rel": float(np.sqrt(acc[2] / max(acc[3], 1e-300)))}

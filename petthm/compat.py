@@ -1,0 +1,169 @@
+"""Every difference between the supported PETSc/petsc4py versions (3.18-3.26).
+
+petthm calls PETSc through petsc4py.  A few C functions that it needs are not
+wrapped by every petsc4py release (COO matrix assembly before 3.24, DMPlex
+cone arrays); those are reached through a small ctypes bridge to the
+``libpetsc`` that petsc4py has already loaded into the process, so that the
+very same library (and its integer width) is used.  Nothing outside this
+module may test the PETSc version.
+"""
+from __future__ import annotations
+
+import ctypes
+import functools
+
+import numpy as np
+from petsc4py import PETSc
+
+MIN_VERSION = (3, 18, 0)
+VERSION = tuple(PETSc.Sys.getVersion())
+
+if VERSION < MIN_VERSION:  # pragma: no cover - checked at import on old installs
+    raise ImportError(
+        f"petthm needs PETSc >= {'.'.join(map(str, MIN_VERSION))}, "
+        f"found {'.'.join(map(str, VERSION))}")
+
+INT = np.dtype(PETSc.IntType)
+SCALAR = np.dtype(PETSc.ScalarType)
+if SCALAR != np.float64:  # pragma: no cover
+    raise ImportError("petthm needs a real, double-precision PETSc build")
+
+
+def version_string() -> str:
+    """'3.18.5'-style PETSc version of the loaded library."""
+    return ".".join(str(v) for v in VERSION)
+
+
+# --------------------------------------------------------------------------
+# ctypes bridge
+# --------------------------------------------------------------------------
+@functools.lru_cache(maxsize=None)
+def _lib() -> ctypes.CDLL:
+    """The libpetsc already mapped into this process by petsc4py."""
+    with open("/proc/self/maps") as maps:
+        for line in maps:
+            path = line.split()[-1]
+            name = path.rsplit("/", 1)[-1]
+            if name.startswith("libpetsc") and ".so" in name:
+                return ctypes.CDLL(path)
+    raise ImportError("cannot locate the libpetsc loaded by petsc4py")  # pragma: no cover
+
+
+_c_int_p = np.ctypeslib.ndpointer(dtype=INT, flags="C_CONTIGUOUS")
+_c_real_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+_c_petscint = ctypes.c_int64 if INT.itemsize == 8 else ctypes.c_int32
+
+
+def _check(ierr: int, fname: str) -> None:
+    if ierr:
+        raise RuntimeError(f"PETSc error {ierr} in {fname}")
+
+
+def _cfunc(name: str, *argtypes):
+    fn = getattr(_lib(), name)
+    fn.restype = ctypes.c_int
+    fn.argtypes = list(argtypes)
+    return fn
+
+
+# --------------------------------------------------------------------------
+# Sections
+# --------------------------------------------------------------------------
+def set_local_section(dm: PETSc.DM, section: PETSc.Section) -> None:
+    """DMSetLocalSection (named setSection in petsc4py < 3.20)."""
+    if hasattr(dm, "setLocalSection"):
+        dm.setLocalSection(section)
+    else:
+        dm.setSection(section)
+
+
+def get_local_section(dm: PETSc.DM) -> PETSc.Section:
+    """DMGetLocalSection (named getSection in petsc4py < 3.20)."""
+    if hasattr(dm, "getLocalSection"):
+        return dm.getLocalSection()
+    return dm.getSection()
+
+
+# --------------------------------------------------------------------------
+# COO assembly
+# --------------------------------------------------------------------------
+_NATIVE_COO = hasattr(PETSc.Mat, "setPreallocationCOO")
+
+
+def coo_preallocate(mat: PETSc.Mat, rows: np.ndarray, cols: np.ndarray) -> None:
+    """MatSetPreallocationCOO with global indices (negative ones are ignored)."""
+    rows = np.ascontiguousarray(rows, dtype=INT).copy()  # PETSc may overwrite
+    cols = np.ascontiguousarray(cols, dtype=INT).copy()
+    if _NATIVE_COO:
+        mat.setPreallocationCOO(rows, cols)
+        return
+    fn = _cfunc("MatSetPreallocationCOO", ctypes.c_void_p, ctypes.c_int64,
+                _c_int_p, _c_int_p)
+    _check(fn(mat.handle, rows.size, rows, cols), "MatSetPreallocationCOO")
+
+
+def coo_set_values(mat: PETSc.Mat, values: np.ndarray) -> None:
+    """MatSetValuesCOO(..., INSERT_VALUES): repeated entries are summed."""
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    if _NATIVE_COO:
+        mat.setValuesCOO(values, addv=PETSc.InsertMode.INSERT_VALUES)
+        return
+    fn = _cfunc("MatSetValuesCOO", ctypes.c_void_p, _c_real_p, ctypes.c_int)
+    _check(fn(mat.handle, values, int(PETSc.InsertMode.INSERT_VALUES)),
+           "MatSetValuesCOO")
+
+
+# --------------------------------------------------------------------------
+# DMPlex topology arrays
+# --------------------------------------------------------------------------
+def plex_cone_array(dm: PETSc.DMPlex, pstart: int, pend: int, size: int) -> np.ndarray:
+    """Cones of the points [pstart, pend) as an (n, size) array.
+
+    All points of the range must have cone size ``size``; uses
+    DMPlexGetCones/DMPlexGetConeSection so that no Python loop over points is
+    needed.
+    """
+    n = pend - pstart
+    if n == 0:
+        return np.zeros((0, size), dtype=INT)
+    sec = ctypes.c_void_p()
+    _check(_cfunc("DMPlexGetConeSection", ctypes.c_void_p,
+                  ctypes.POINTER(ctypes.c_void_p))(dm.handle, ctypes.byref(sec)),
+           "DMPlexGetConeSection")
+    cones = ctypes.POINTER(_c_petscint)()
+    _check(_cfunc("DMPlexGetCones", ctypes.c_void_p,
+                  ctypes.POINTER(ctypes.POINTER(_c_petscint)))(dm.handle, ctypes.byref(cones)),
+           "DMPlexGetCones")
+    get_off = _cfunc("PetscSectionGetOffset", ctypes.c_void_p, _c_petscint,
+                     ctypes.POINTER(_c_petscint))
+    first, last = _c_petscint(), _c_petscint()
+    _check(get_off(sec, pstart, ctypes.byref(first)), "PetscSectionGetOffset")
+    _check(get_off(sec, pend - 1, ctypes.byref(last)), "PetscSectionGetOffset")
+    if last.value - first.value != (n - 1) * size or dm.getConeSize(pend - 1) != size:
+        raise RuntimeError("DMPlex cone storage is not contiguous for this stratum")
+    total = first.value + n * size
+    arr = np.ctypeslib.as_array(cones, shape=(total,))
+    return arr[first.value:total].reshape(n, size).copy()
+
+
+def lgmap_indices(dm: PETSc.DM) -> np.ndarray:
+    """Global index of every local dof (constrained dofs are negative)."""
+    return np.asarray(dm.getLGMap().getIndices(), dtype=INT)
+
+
+def unused_options() -> list[str]:
+    """Names (without '-') of options in the database that nothing has queried."""
+    n = _c_petscint()
+    names = ctypes.POINTER(ctypes.c_char_p)()
+    values = ctypes.POINTER(ctypes.c_char_p)()
+    fn = _cfunc("PetscOptionsLeftGet", ctypes.c_void_p, ctypes.POINTER(_c_petscint),
+                ctypes.POINTER(ctypes.POINTER(ctypes.c_char_p)),
+                ctypes.POINTER(ctypes.POINTER(ctypes.c_char_p)))
+    _check(fn(None, ctypes.byref(n), ctypes.byref(names), ctypes.byref(values)), "PetscOptionsLeftGet")
+    out = [names[i].decode() for i in range(n.value)]
+    restore = _cfunc("PetscOptionsLeftRestore", ctypes.c_void_p, ctypes.POINTER(_c_petscint),
+                     ctypes.POINTER(ctypes.POINTER(ctypes.c_char_p)),
+                     ctypes.POINTER(ctypes.POINTER(ctypes.c_char_p)))
+    _check(restore(None, ctypes.byref(n), ctypes.byref(names), ctypes.byref(values)),
+           "PetscOptionsLeftRestore")
+    return [s[1:] if s.startswith("-") else s for s in out]

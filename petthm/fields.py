@@ -1,0 +1,166 @@
+"""Fields -> PetscSection, element->dof index arrays and Dirichlet dofs.
+
+Each field is continuous Lagrange P1 (dofs on vertices) or P2 (vertices and
+edges) with ``ncomp`` components.  The section is made by DMPlexCreateSection
+with the Dirichlet points constrained, so the global vector holds only the
+unknowns; constrained values live in the local vector and are written there
+before every residual or Jacobian evaluation.  The element->dof arrays index
+the local vector and are built once, in the node order of ``fe.tabulate``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from petsc4py import PETSc
+
+from . import compat, fe
+from .mesh import Mesh
+
+
+@dataclass(frozen=True)
+class FieldSpec:
+    """A primary field: name (also the fieldsplit prefix and output name),
+    number of components and Lagrange degree."""
+    name: str
+    ncomp: int = 1
+    degree: int = 2
+
+
+@dataclass
+class DirichletDofs:
+    """Local dof indices of one field on one boundary part and their node coordinates."""
+    field: str
+    boundary: str
+    dofs: np.ndarray        # (n, ncomp) local dof indices
+    coords: np.ndarray      # (n, dim)
+
+
+class Discretisation:
+    """The PetscSection of a set of fields on a mesh and its index arrays."""
+
+    def __init__(self, mesh: Mesh, fields: Sequence[FieldSpec],
+                 dirichlet: dict[str, Sequence[str]] | None = None, dm: PETSc.DM | None = None):
+        self.mesh = mesh
+        self.dm = dm or mesh.dm
+        self.fields = list(fields)
+        self.index = {f.name: i for i, f in enumerate(self.fields)}
+        dirichlet = dirichlet or {}
+        dm = self.dm
+        self.depths = {f.name: (0, 1) if f.degree == 2 else (0,) for f in self.fields}
+        bc_points = {f.name: self._bc_points(dirichlet.get(f.name, ()), f) for f in self.fields}
+        self.section = self._create_section(bc_points)
+        compat.set_local_section(dm, self.section)
+        self.nlocal = self.section.getStorageSize()
+        self.offsets = self._point_offsets()
+        self.elem_dofs = {f.name: self._element_dofs(f) for f in self.fields}
+        self.dirichlet = [self._dirichlet(f, b) for f in self.fields for b in dirichlet.get(f.name, ())]
+        self.global_index = compat.lgmap_indices(dm)
+        if self.global_index.size != self.nlocal:
+            raise RuntimeError("local-to-global map does not match the local section")
+
+    # -- section --------------------------------------------------------------
+    def _bc_points(self, boundaries, f: FieldSpec) -> np.ndarray:
+        pts = [self.mesh.label_points(b, d) for b in boundaries for d in self.depths[f.name]]
+        return np.unique(np.concatenate(pts)).astype(compat.INT) if pts else np.zeros(0, compat.INT)
+
+    def _create_section(self, bc_points) -> PETSc.Section:
+        dim = self.mesh.dim
+        num_comp = [f.ncomp for f in self.fields]
+        num_dof = np.zeros((len(self.fields), dim + 1), dtype=compat.INT)
+        for i, f in enumerate(self.fields):
+            for d in self.depths[f.name]:
+                num_dof[i, d] = f.ncomp
+        bc_field, bc_comps, bc_is = [], [], []
+        for i, f in enumerate(self.fields):
+            if bc_points[f.name].size:
+                bc_field.append(i)
+                bc_comps.append(PETSc.IS().createGeneral(np.arange(f.ncomp, dtype=compat.INT),
+                                                         comm=PETSc.COMM_SELF))
+                bc_is.append(PETSc.IS().createGeneral(bc_points[f.name], comm=PETSc.COMM_SELF))
+        self.dm.setNumFields(len(self.fields))
+        sec = self.dm.createSection(num_comp, num_dof.ravel(), bc_field or None,
+                                         bc_comps or None, bc_is or None)
+        for i, f in enumerate(self.fields):
+            sec.setFieldName(i, f.name)
+        return sec
+
+    def _point_offsets(self) -> dict[str, np.ndarray]:
+        """Local offset of each field's first dof at each vertex/edge point.
+
+        Computed in numpy from the dof layout (points in chart order, fields
+        interleaved per point, as PetscSectionSetUp lays them out) and checked
+        against the section at a sample of points.
+        """
+        m = self.mesh
+        pstart, pend = self.dm.getChart()
+        ndof = np.zeros(pend - pstart, dtype=np.int64)
+        fstart = {}
+        for f in self.fields:
+            fdof = np.zeros(pend - pstart, dtype=np.int64)
+            for d in self.depths[f.name]:
+                lo, hi = m.dm.getDepthStratum(d)
+                fdof[lo - pstart:hi - pstart] = f.ncomp
+            fstart[f.name] = ndof.copy()
+            ndof += fdof
+        start = np.concatenate([[0], np.cumsum(ndof)[:-1]])
+        offsets = {f.name: (start + fstart[f.name]).astype(compat.INT) for f in self.fields}
+        sample = np.unique(np.linspace(pstart, pend - 1, min(64, pend - pstart)).astype(int))
+        for i, f in enumerate(self.fields):
+            for p in sample:
+                if self.section.getFieldDof(int(p), i) and \
+                        self.section.getFieldOffset(int(p), i) != offsets[f.name][p - pstart]:
+                    raise RuntimeError("unexpected PetscSection layout (a permutation is set?)")
+        self.pstart = pstart
+        return offsets
+
+    def _element_dofs(self, f: FieldSpec) -> np.ndarray:
+        m = self.mesh
+        points = m.cell_vertices + m.vstart
+        if f.degree == 2:
+            points = np.hstack([points, m.cell_edges])
+        base = self.offsets[f.name][points - self.pstart]                # (nc, nb)
+        return (base[:, :, None] + np.arange(f.ncomp)).reshape(len(base), -1).astype(compat.INT)
+
+    def _dirichlet(self, f: FieldSpec, boundary: str) -> DirichletDofs:
+        pts = np.concatenate([self.mesh.label_points(boundary, d) for d in self.depths[f.name]])
+        base = self.offsets[f.name][pts - self.pstart]
+        return DirichletDofs(f.name, boundary, base[:, None] + np.arange(f.ncomp),
+                             self.mesh.point_coordinates(pts))
+
+    # -- helpers ----------------------------------------------------------------
+    def field(self, name: str) -> FieldSpec:
+        return self.fields[self.index[name]]
+
+    def nodes_per_cell(self, name: str) -> int:
+        return fe.nodes_per_cell(self.mesh.dim, self.field(name).degree)
+
+    def field_local_dofs(self, name: str) -> np.ndarray:
+        """All local dof indices of a field (vertex and edge points), (n, ncomp)."""
+        f = self.field(name)
+        pts = np.concatenate([np.arange(*self.mesh.dm.getDepthStratum(d)) for d in self.depths[name]])
+        return self.offsets[name][pts - self.pstart][:, None] + np.arange(f.ncomp)
+
+    def field_node_coordinates(self, name: str) -> np.ndarray:
+        pts = np.concatenate([np.arange(*self.mesh.dm.getDepthStratum(d)) for d in self.depths[name]])
+        return self.mesh.point_coordinates(pts)
+
+    def global_sizes(self) -> dict[str, int]:
+        """Number of unknowns per field (global, constrained dofs excluded)."""
+        out = {}
+        for i, f in enumerate(self.fields):
+            dofs = self.field_local_dofs(f.name).ravel()
+            g = self.global_index[dofs]
+            out[f.name] = self.mesh.dm.comm.tompi4py().allreduce(int(self._owned(g).sum()))
+        return out
+
+    def _owned(self, g: np.ndarray) -> np.ndarray:
+        lo, hi = self.ownership_range()
+        return (g >= lo) & (g < hi)
+
+    def ownership_range(self) -> tuple[int, int]:
+        v = self.dm.getGlobalVec()
+        r = v.getOwnershipRange()
+        self.dm.restoreGlobalVec(v)
+        return r

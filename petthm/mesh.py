@@ -1,0 +1,250 @@
+"""gmsh file -> distributed DMPlex, boundary labels and vectorised topology.
+
+The mesh is read on rank 0, boundary facets are labelled there (labels made
+before ``distribute()`` migrate consistently with the points), then the DM is
+distributed and ``-dm_*`` options (``-dm_refine K``, ``-dm_view``) are
+applied.  After that, the cell->vertex, cell->edge and facet arrays every
+assembly needs are built once, without a Python loop over cells.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import numpy as np
+from petsc4py import PETSc
+
+from . import compat, fe
+from .errors import InputError
+
+#: A boundary predicate receives facet centroids (n, dim) and returns a mask.
+BoundaryPredicate = Callable[[np.ndarray], np.ndarray]
+
+
+def label_name(boundary: str) -> str:
+    """DMLabel name of a named boundary part."""
+    return f"thm_bc_{boundary}"
+
+
+def read_plex(path: str, comm: PETSc.Comm) -> PETSc.DMPlex:
+    """Read a gmsh file (serially on rank 0, as PETSc does) into an interpolated DMPlex."""
+    ok = comm.tompi4py().bcast(os.path.isfile(path) if comm.rank == 0 else None, root=0)
+    if not ok:
+        raise InputError(f"mesh file '{path}' does not exist (-thm_mesh_file)")
+    dm = PETSc.DMPlex().createFromFile(path, interpolate=True, comm=comm)
+    dm.setName("mesh")
+    return dm
+
+
+def label_boundaries(dm: PETSc.DMPlex, parts: Mapping[str, BoundaryPredicate]) -> None:
+    """Create one label per named boundary part, with the closure of its facets.
+
+    Must be called before distribution; predicates see the facet centroids.
+    """
+    dim = dm.getDimension()
+    dm.createLabel("thm_boundary_all")
+    dm.markBoundaryFaces("thm_boundary_all", 1)
+    facets = np.asarray(dm.getStratumIS("thm_boundary_all", 1).getIndices(), dtype=compat.INT) \
+        if dm.getStratumSize("thm_boundary_all", 1) > 0 else np.zeros(0, dtype=compat.INT)
+    topo = _VertexTopology(dm)
+    centroids = topo.coords[topo.point_vertices(facets, dim - 1)].mean(axis=1) \
+        if facets.size else np.zeros((0, dim))
+    for name, predicate in parts.items():
+        dm.createLabel(label_name(name))
+        label = dm.getLabel(label_name(name))
+        for p in facets[np.asarray(predicate(centroids), dtype=bool)]:
+            label.setValue(int(p), 1)
+        dm.labelComplete(label)
+    dm.removeLabel("thm_boundary_all")
+
+
+def distribute(dm: PETSc.DMPlex) -> PETSc.DMPlex:
+    """Distribute over the communicator (no overlap) and apply -dm_* options."""
+    if dm.comm.size > 1:
+        dm.distribute()
+    dm.setFromOptions()
+    dm.setName("mesh")
+    return dm
+
+
+class _VertexTopology:
+    """Vertex closures of points of a given depth from the cone arrays."""
+
+    def __init__(self, dm: PETSc.DMPlex):
+        self.dm = dm
+        self.dim = dm.getDimension()
+        self.vstart, self.vend = dm.getDepthStratum(0)
+        self.cones = {d: compat.plex_cone_array(dm, *dm.getDepthStratum(d), _cone_size(self.dim, d))
+                      for d in range(1, self.dim + 1)}
+        self.starts = {d: dm.getDepthStratum(d)[0] for d in range(0, self.dim + 1)}
+        cdim = dm.getCoordinateDim()
+        csec = dm.getCoordinateSection()
+        nv = self.vend - self.vstart
+        if nv and (csec.getOffset(self.vstart) != 0 or csec.getOffset(self.vend - 1) != (nv - 1) * cdim):
+            raise RuntimeError("unexpected coordinate layout")
+        self.coords = dm.getCoordinatesLocal().getArray().reshape(-1, cdim)[:, :self.dim].copy()
+
+    def point_vertices(self, points: np.ndarray, depth: int) -> np.ndarray:
+        """Sorted vertex indices (relative to vStart) of points of ``depth``: (n, depth+1)."""
+        cur = np.asarray(points).reshape(-1, 1)
+        for d in range(depth, 0, -1):
+            cur = self.cones[d][(cur - self.starts[d]).ravel()].reshape(len(points), -1)
+        return _unique_rows(cur, depth + 1) - self.vstart
+
+    def point_edges(self, points: np.ndarray, depth: int) -> np.ndarray:
+        """Sorted edge points of points of ``depth`` >= 2: (n, nedges)."""
+        cur = np.asarray(points).reshape(-1, 1)
+        for d in range(depth, 1, -1):
+            cur = self.cones[d][(cur - self.starts[d]).ravel()].reshape(len(points), -1)
+        return _unique_rows(cur, len(fe.EDGES[depth]))
+
+
+def _cone_size(dim: int, depth: int) -> int:
+    """Cone size of a simplex point of ``depth`` in a simplicial mesh."""
+    return 2 if depth == 1 else depth + 1
+
+
+def _unique_rows(a: np.ndarray, k: int) -> np.ndarray:
+    """Per row, the ``k`` distinct values (sorted)."""
+    s = np.sort(a, axis=1)
+    keep = np.ones_like(s, dtype=bool)
+    keep[:, 1:] = s[:, 1:] != s[:, :-1]
+    out = s[keep]
+    if out.size != k * len(a):
+        raise RuntimeError("non-simplicial cell found in the mesh")
+    return out.reshape(len(a), k)
+
+
+@dataclass
+class Mesh:
+    """A distributed simplicial DMPlex with the arrays that assembly needs.
+
+    Attributes (local to this rank):
+      cell_vertices (nc, d+1): vertex indices relative to vStart, ascending;
+      cell_edges (nc, ne): edge points in the VTK order of ``fe.EDGES``;
+      vertex_coords (nv, d); edge_midpoints (nedge, d);
+      J, Jinv (nc, d, d), detJ (nc,): affine map x = x0 + J xi; h (nc,) longest edge.
+    """
+    dm: PETSc.DMPlex
+    dim: int = 0
+    cell_vertices: np.ndarray = field(default=None, repr=False)
+    cell_edges: np.ndarray = field(default=None, repr=False)
+    vertex_coords: np.ndarray = field(default=None, repr=False)
+    edge_vertices: np.ndarray = field(default=None, repr=False)
+    x0: np.ndarray = field(default=None, repr=False)
+    J: np.ndarray = field(default=None, repr=False)
+    Jinv: np.ndarray = field(default=None, repr=False)
+    detJ: np.ndarray = field(default=None, repr=False)
+    h: np.ndarray = field(default=None, repr=False)
+
+    def __post_init__(self):
+        dm = self.dm
+        self.dim = dim = dm.getDimension()
+        topo = _VertexTopology(dm)
+        self._topo = topo
+        self.cstart, self.cend = dm.getHeightStratum(0)
+        self.vstart, self.vend = dm.getDepthStratum(0)
+        self.estart, self.eend = dm.getDepthStratum(1)
+        cells = np.arange(self.cstart, self.cend, dtype=compat.INT)
+        self.vertex_coords = topo.coords
+        self.cell_vertices = topo.point_vertices(cells, dim)
+        self.edge_vertices = topo.cones[1] - self.vstart
+        self.cell_edges = self._ordered_cell_edges(topo, cells)
+        self._geometry()
+
+    # -- topology -----------------------------------------------------------
+    def _ordered_cell_edges(self, topo, cells):
+        dim = self.dim
+        edges = cells[:, None] if dim == 1 else (
+            topo.cones[2][cells - topo.starts[2]] if dim == 2 else topo.point_edges(cells, dim))
+        if dim == 1:
+            return np.zeros((len(cells), 0), dtype=compat.INT)
+        ev = self.edge_vertices[edges - self.estart]                  # (nc, ne, 2)
+        local = np.argmax(ev[:, :, :, None] == self.cell_vertices[:, None, None, :], axis=3)
+        local.sort(axis=2)
+        code = local[:, :, 0] * (dim + 1) + local[:, :, 1]
+        slot = np.full((dim + 1) ** 2, -1)
+        for k, (a, b) in enumerate(fe.EDGES[dim]):
+            slot[a * (dim + 1) + b] = k
+        ordered = np.empty_like(edges)
+        np.put_along_axis(ordered, slot[code], edges, axis=1)
+        return ordered
+
+    def _geometry(self):
+        X = self.vertex_coords[self.cell_vertices]                    # (nc, d+1, d)
+        self.x0 = X[:, 0, :]
+        self.J = np.ascontiguousarray(np.swapaxes(X[:, 1:, :] - X[:, :1, :], 1, 2))
+        self.detJ = np.linalg.det(self.J) if len(X) else np.zeros(0)
+        self.Jinv = np.linalg.inv(self.J) if len(X) else np.zeros((0, self.dim, self.dim))
+        a, b = fe.EDGES[self.dim][:, 0], fe.EDGES[self.dim][:, 1]
+        self.h = np.linalg.norm(X[:, a] - X[:, b], axis=2).max(axis=1) if len(X) else np.zeros(0)
+
+    @property
+    def ncells(self) -> int:
+        return self.cend - self.cstart
+
+    def edge_midpoints(self) -> np.ndarray:
+        ev = self.edge_vertices
+        return 0.5 * (self.vertex_coords[ev[:, 0]] + self.vertex_coords[ev[:, 1]])
+
+    def point_coordinates(self, points: np.ndarray) -> np.ndarray:
+        """Coordinates of vertex points and (midpoints of) edge points."""
+        points = np.asarray(points)
+        out = np.empty((len(points), self.dim))
+        isv = (points >= self.vstart) & (points < self.vend)
+        out[isv] = self.vertex_coords[points[isv] - self.vstart]
+        ise = (points >= self.estart) & (points < self.eend)
+        out[ise] = self.edge_midpoints()[points[ise] - self.estart]
+        return out
+
+    def cell_points(self, x_ref: np.ndarray) -> np.ndarray:
+        """Physical coordinates (nc, nq, d) of reference points (nq, d)."""
+        return self.x0[:, None, :] + np.einsum("cak,qk->cqa", self.J, x_ref)
+
+    # -- boundaries ---------------------------------------------------------
+    def label_points(self, name: str, depth: int | None = None) -> np.ndarray:
+        """Local points carrying a boundary label (optionally of one depth)."""
+        lname = label_name(name)
+        if not self.dm.hasLabel(lname) or self.dm.getStratumSize(lname, 1) == 0:
+            return np.zeros(0, dtype=compat.INT)
+        pts = np.asarray(self.dm.getStratumIS(lname, 1).getIndices(), dtype=compat.INT)
+        if depth is not None:
+            lo, hi = self.dm.getDepthStratum(depth)
+            pts = pts[(pts >= lo) & (pts < hi)]
+        return pts
+
+    def boundary_facets(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Facets of a named boundary part: (cell index, local facet number, measure).
+
+        The local facet number ``f`` is the facet opposite the cell's local
+        vertex ``f`` (the convention of ``fe.facet_points``).
+        """
+        dim = self.dim
+        facets = self.label_points(name, dim - 1)
+        if facets.size == 0:
+            return (np.zeros(0, dtype=compat.INT),) * 2 + (np.zeros(0),)
+        topo = self._topo
+        cells = np.asarray([self.dm.getSupport(int(f))[0] for f in facets], dtype=compat.INT)
+        fverts = topo.point_vertices(facets, dim - 1)
+        cverts = self.cell_vertices[cells - self.cstart]
+        inside = (cverts[:, :, None] == fverts[:, None, :]).any(axis=2)
+        local = np.argmin(inside, axis=1)
+        X = self.vertex_coords[fverts]
+        if dim == 2:
+            measure = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+        elif dim == 3:
+            measure = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
+        else:
+            measure = np.ones(len(facets))
+        return cells - self.cstart, local, measure
+
+    def outward_normals(self, cells: np.ndarray, local: np.ndarray) -> np.ndarray:
+        """Unit outward normal of facet ``local`` of each cell (reference normal mapped)."""
+        dim = self.dim
+        nref = np.vstack([np.ones(dim) / np.sqrt(dim), -np.eye(dim)])   # outward on ref facets
+        n = np.einsum("cka,ck->ca", self.Jinv[cells], nref[local])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    def global_cell_count(self) -> int:
+        return self.dm.comm.tompi4py().allreduce(self.ncells)

@@ -1,0 +1,144 @@
+"""-thm_* options -> frozen, typed parameter objects with units and help.
+
+A parameter set is a frozen dataclass whose fields are declared with
+``param(default, unit, help, lo=, hi=)``.  ``read(cls)`` reads every field
+from the PETSc options database once (option ``-thm_<field name>``, or the
+``option`` given in the metadata), checks its range and returns the frozen
+object.  Physical inputs are SI, except temperatures, which users give in
+degrees Celsius (``unit="degC"``) and petthm converts to kelvin.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+from typing import Any, Iterable
+
+from petsc4py import PETSc
+
+from .errors import InputError
+
+PREFIX = "thm_"
+CELSIUS = 273.15
+
+
+def param(default: Any, unit: str, help: str, lo: float | None = None, hi: float | None = None,
+          lo_open: bool = False, choices: tuple | None = None, option: str | None = None):
+    """Declare a parameter: default (SI, degC for temperatures), unit, help, accepted range."""
+    return dataclasses.field(default=default, metadata=dict(
+        unit=unit, help=help, lo=lo, hi=hi, lo_open=lo_open, choices=choices, option=option))
+
+
+def option_name(f: dataclasses.Field) -> str:
+    return f.metadata.get("option") or PREFIX + f.name
+
+
+def _range_text(md) -> str:
+    lo, hi = md.get("lo"), md.get("hi")
+    if md.get("choices"):
+        return "one of " + ", ".join(map(str, md["choices"]))
+    left = "(" if md.get("lo_open") else "["
+    return f"{left}{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+
+
+def _convert(f: dataclasses.Field, raw: str):
+    name = option_name(f)
+    kind = type(f.default)
+    try:
+        if kind is bool:
+            low = raw.strip().lower()
+            if low in ("", "1", "true", "yes", "on"):
+                return True
+            if low in ("0", "false", "no", "off"):
+                return False
+            raise ValueError(raw)
+        if kind is int:
+            return int(raw)
+        if kind is float:
+            return float(raw)
+        if kind is tuple:
+            return tuple(float(v) for v in raw.split(","))
+        return raw
+    except ValueError:
+        raise InputError(f"option -{name}: cannot read '{raw}' as {kind.__name__}") from None
+
+
+def _check(f: dataclasses.Field, value) -> None:
+    md = f.metadata
+    name = option_name(f)
+    if md.get("choices") and value not in md["choices"]:
+        raise InputError(f"option -{name} = {value} is not {_range_text(md)}")
+    vals = value if isinstance(value, tuple) else (value,)
+    for v in vals:
+        if not isinstance(v, (int, float)) or isinstance(v, bool):
+            continue
+        lo, hi = md.get("lo"), md.get("hi")
+        bad = (lo is not None and (v < lo or (md.get("lo_open") and v == lo))) or \
+              (hi is not None and v > hi) or v != v
+        if bad:
+            raise InputError(f"option -{name} = {v} {md['unit']} is outside the accepted range "
+                             f"{_range_text(md)}")
+
+
+def read(cls, options: PETSc.Options | None = None):
+    """Read a parameter dataclass from the options database."""
+    opts = options or PETSc.Options()
+    values = {}
+    for f in dataclasses.fields(cls):
+        name = option_name(f)
+        if opts.hasName(name):
+            values[f.name] = _convert(f, opts.getString(name, ""))
+        else:
+            values[f.name] = f.default
+        _check(f, values[f.name])
+    return cls(**values)
+
+
+def known_options(classes: Iterable[type]) -> set[str]:
+    return {option_name(f) for cls in classes for f in dataclasses.fields(cls)}
+
+
+def check_unknown_thm_options(classes: Iterable[type], options: PETSc.Options | None = None) -> None:
+    """Every -thm_ option given must belong to one of ``classes``."""
+    opts = options or PETSc.Options()
+    known = known_options(classes)
+    for key in sorted(opts.getAll()):
+        if key.startswith(PREFIX) and key not in known:
+            close = difflib.get_close_matches(key, sorted(known), n=1)
+            hint = f" (did you mean -{close[0]}?)" if close else ""
+            raise InputError(f"unknown option -{key}{hint}")
+
+
+def help_text(classes: Iterable[type]) -> str:
+    """One line per parameter: option, default, unit, help."""
+    lines = []
+    for cls in classes:
+        lines.append(f"  {cls.__doc__.strip().splitlines()[0]}")
+        for f in dataclasses.fields(cls):
+            md = f.metadata
+            d = f.default
+            d = ",".join(map(str, d)) if isinstance(d, tuple) else d
+            rng = _range_text(md) if (md.get("lo") is not None or md.get("hi") is not None
+                                      or md.get("choices")) else ""
+            lines.append(f"    -{option_name(f):<34} {str(d):>12} {md['unit']:<10} {md['help']}"
+                         + (f"  {rng}" if rng else ""))
+    return "\n".join(lines)
+
+
+def as_dict(p) -> dict:
+    return dataclasses.asdict(p)
+
+
+@dataclasses.dataclass(frozen=True)
+class RunParams:
+    """Run control (all scenes)"""
+    output_dir: str = param("", "-", "output folder (default output/SCENE)")
+    mesh_file: str = param("", "-", "gmsh mesh file to use instead of the scene's generated mesh")
+    mesh_size: float = param(0.0, "m", "characteristic mesh size (0: scene default)", lo=0.0)
+    fe_degree: int = param(2, "-", "Lagrange degree of the matrix fields", choices=(1, 2))
+    quadrature_degree: int = param(0, "-", "quadrature degree (0: 2 x element degree)", lo=0, hi=20)
+    final_time: float = param(0.0, "s", "end time (0: scene default)", lo=0.0)
+    dt_initial: float = param(0.0, "s", "first time step (0: scene default)", lo=0.0)
+    dt_growth: float = param(0.0, "-", "time-step growth factor per step (0: scene default)", lo=0.0)
+    dt_max: float = param(0.0, "s", "largest time step (0: scene default)", lo=0.0)
+    output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0)
+    quiet: bool = param(False, "-", "no per-step progress line")

@@ -1,0 +1,5 @@
+"""Scenes: one module per family; importing a module registers its scenes."""
+
+
+def load_all() -> None:
+    from . import heat  # noqa: F401

@@ -1,0 +1,44 @@
+"""Self-checks petthm can run on any problem: Jacobian against finite differences."""
+from __future__ import annotations
+
+import numpy as np
+from petsc4py import PETSc
+
+
+def jacobian_fd_error(problem, t: float = 0.0, shift: float = 1.0, eps: float = 1e-6,
+                      seed: int = 0) -> float:
+    """Relative error ||J d - (F(x+eps d) - F(x-eps d))/(2 eps)|| / ||J d||.
+
+    F(t, X, Xdot) is evaluated along X(s) = X + s d, Xdot(s) = Xdot + shift s d,
+    so J = dF/dX + shift dF/dXdot is the backward-Euler Jacobian.  X is the
+    problem's current state plus a random perturbation (so that nonlinear
+    terms are exercised away from special points); d is random.
+    """
+    X = problem.X.duplicate()
+    problem.X.copy(X)
+    rng = np.random.default_rng(seed + problem.dm.comm.rank)
+    X.getArray()[:] += 0.1 * rng.standard_normal(X.getLocalSize())
+    d = X.duplicate()
+    d.getArray()[:] = rng.standard_normal(d.getLocalSize())
+    Xdot = X.duplicate()
+    Xdot.getArray()[:] = rng.standard_normal(X.getLocalSize())
+    J = problem.create_matrix()
+    problem.ijacobian(None, t, X, Xdot, shift, J, J)
+    Jd = X.duplicate()
+    J.mult(d, Jd)
+    Fp, Fm = X.duplicate(), X.duplicate()
+    Xp, Xm = X.duplicate(), X.duplicate()
+    Xp.waxpy(eps, d, X)
+    Xm.waxpy(-eps, d, X)
+    Xdp, Xdm = Xdot.duplicate(), Xdot.duplicate()
+    Xdp.waxpy(shift * eps, d, Xdot)
+    Xdm.waxpy(-shift * eps, d, Xdot)
+    problem.ifunction(None, t, Xp, Xdp, Fp)
+    problem.ifunction(None, t, Xm, Xdm, Fm)
+    fd = Fp - Fm
+    fd.scale(1.0 / (2 * eps))
+    diff = fd - Jd
+    return diff.norm() / max(Jd.norm(), 1e-300)
+
+
+__all__ = ["jacobian_fd_error", "PETSc"]

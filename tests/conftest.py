@@ -1,0 +1,42 @@
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MPI_ENV = dict(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="1")
+
+
+def pytest_configure(config):
+    import petsc4py
+    petsc4py.init([sys.argv[0]])
+
+
+def run_petthm(scene, outdir, *options, ranks=1, check=True, timeout=600):
+    """Run ``python -m petthm SCENE`` (under mpiexec when ranks > 1); returns
+    (CompletedProcess, summary dict or None)."""
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", str(outdir), "-thm_quiet",
+           *map(str, options)]
+    if ranks > 1:
+        cmd = ["mpiexec", "-n", str(ranks)] + cmd
+    env = dict(os.environ, **MPI_ENV)
+    proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
+    path = os.path.join(outdir, "summary.json")
+    summary = json.load(open(path)) if os.path.exists(path) else None
+    return proc, summary
+
+
+def fitted_slope(h, e):
+    """Least-squares slope of log(e) against log(h)."""
+    return float(np.polyfit(np.log(h), np.log(e), 1)[0])
+
+
+@pytest.fixture
+def petthm_run():
+    return run_petthm

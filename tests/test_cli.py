@@ -1,0 +1,66 @@
+"""Command line: help, and one-line errors that name the problem."""
+import subprocess
+import sys
+
+import pytest
+
+from conftest import ROOT, run_petthm
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "petthm", *args], cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_help_lists_scenes():
+    p = _cli("-help")
+    assert p.returncode == 0
+    for name in ("heat_mms", "heat_erfc", "heat_advection"):
+        assert name in p.stdout
+
+
+def test_scene_help_lists_parameters_with_units_and_defaults():
+    p = _cli("heat_erfc", "-help")
+    assert p.returncode == 0
+    line = next(l for l in p.stdout.splitlines() if "-thm_rock_conductivity" in l)
+    assert "2.9" in line and "W/(m K)" in line
+
+
+def _one_line_error(proc):
+    err = [l for l in proc.stderr.strip().splitlines() if l.strip()]
+    assert proc.returncode == 2, proc.stderr + proc.stdout
+    assert len(err) == 1, proc.stderr
+    return err[0]
+
+
+def test_misspelt_thm_option_is_an_error(tmp_path):
+    proc, _ = run_petthm("heat_mms", tmp_path, "-thm_rock_conductivty", "2", check=False)
+    msg = _one_line_error(proc)
+    assert "unknown option -thm_rock_conductivty" in msg and "-thm_rock_conductivity" in msg
+
+
+def test_misspelt_petsc_option_is_an_error(tmp_path):
+    proc, _ = run_petthm("heat_mms", tmp_path, "-ksp_tpye", "cg", check=False)
+    assert "option -ksp_tpye was not used" in _one_line_error(proc)
+
+
+def test_missing_mesh_file_is_an_error(tmp_path):
+    proc, _ = run_petthm("heat_mms", tmp_path, "-thm_mesh_file", tmp_path / "nope.msh", check=False)
+    msg = _one_line_error(proc)
+    assert "nope.msh" in msg and "does not exist" in msg and "-thm_mesh_file" in msg
+
+
+def test_negative_conductivity_is_an_error(tmp_path):
+    proc, _ = run_petthm("heat_erfc", tmp_path, "-thm_rock_conductivity", "-1", check=False)
+    msg = _one_line_error(proc)
+    assert "-thm_rock_conductivity = -1.0" in msg and "(0.0, inf]" in msg
+
+
+def test_missing_options_file_is_an_error(tmp_path):
+    proc, _ = run_petthm("heat_mms", tmp_path, "-options_file", tmp_path / "x.opts", check=False)
+    assert "x.opts" in _one_line_error(proc)
+
+
+def test_unknown_scene_is_an_error(tmp_path):
+    proc, _ = run_petthm("heat_nope", tmp_path, check=False)
+    assert "unknown scene 'heat_nope'" in _one_line_error(proc)
