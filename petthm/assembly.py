@@ -231,7 +231,7 @@ class Assembler:
 
     def create_matrix(self) -> PETSc.Mat:
         """An AIJ matrix with the DM's layout and this assembler's COO pattern."""
-        A = self.mesh.dm.createMatrix()
+        A = self.mesh.dm.createMat()
         compat.coo_preallocate(A, self.coo_rows, self.coo_cols)
         return A
 

