@@ -70,8 +70,16 @@ class CellContext:
         self.dim = m.dim
         self.Jinv = m.Jinv[cells]
         self.h = m.h[cells][:, None]
-        self.x = m.x0[cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[cells], asm.rule.points)
         self._cache = {}
+
+    @property
+    def x(self):
+        """Physical coordinates of the quadrature points (nc, nq, dim)."""
+        if "x" not in self._cache:
+            m = self._asm.mesh
+            self._cache["x"] = m.x0[self._cells][:, None, :] + \
+                np.einsum("cak,qk->cqa", m.J[self._cells], self._asm.rule.points)
+        return self._cache["x"]
 
     def _nodal(self, name, dot=False):
         key = ("n", name, dot)
@@ -126,10 +134,9 @@ class FacetContext(CellContext):
         self.dim = m.dim
         self.Jinv = m.Jinv[fb.cells]
         self.h = m.h[fb.cells][:, None]
-        self.x = m.x0[fb.cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[fb.cells], fb.points)
-        self.n = np.broadcast_to(fb.normals[:, None, :], self.x.shape)
         self._fb = fb
-        self._cache = {}
+        self._cache = {"x": m.x0[fb.cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[fb.cells], fb.points)}
+        self.n = np.broadcast_to(fb.normals[:, None, :], self.x.shape)
 
     def value(self, name):
         key = ("v", name)
@@ -337,10 +344,12 @@ class Assembler:
                 K += T[..., None] * lap[:, None, None, None, :]
         if jb.g3 is not None:
             g3 = np.broadcast_to(jb.g3(ctx), (nc, nq, m, d, n, d))
-            if m == 1 and n == 1:
-                g = np.einsum("cke,cqef,clf->cqkl", Jinv, g3[:, :, 0, :, 0, :], Jinv) * W[:, :, None, None]
+            JinvT = np.swapaxes(Jinv, 1, 2)
+            if m == 1 and n == 1:   # J^-1 g3 J^-T per quadrature point, as batched matmul
+                g = (Jinv[:, None] @ g3[:, :, 0, :, 0, :] @ JinvT[:, None]) * W[:, :, None, None]
             else:
-                g = np.einsum("cke,cqaebf,clf->cabqkl", Jinv, g3, Jinv) * W[:, None, None, :, None, None]
+                g = Jinv[:, None, None, None] @ g3.transpose(0, 1, 2, 4, 3, 5) @ JinvT[:, None, None, None]
+                g = (g * W[:, :, None, None, None, None]).transpose(0, 2, 3, 1, 4, 5)
             M3 = np.einsum("qik,qjl->qklij", tF.dphi, tG.dphi).reshape(nq * d * d, -1)
             K += (g.reshape(nc * m * n, nq * d * d) @ M3).reshape(K.shape)
         return K.transpose(0, 3, 1, 4, 2)                                   # (nc, nbF, m, nbG, n)
