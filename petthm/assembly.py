@@ -73,6 +73,11 @@ class CellContext:
         self._cache = {}
 
     @property
+    def shape(self) -> tuple[int, int]:
+        """(number of cells, number of quadrature points) of this batch."""
+        return (self.Jinv.shape[0], self._asm.rule.weights.size)
+
+    @property
     def x(self):
         """Physical coordinates of the quadrature points (nc, nq, dim)."""
         if "x" not in self._cache:
@@ -138,6 +143,10 @@ class FacetContext(CellContext):
         self._cache = {"x": m.x0[fb.cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[fb.cells], fb.points)}
         self.n = np.broadcast_to(fb.normals[:, None, :], self.x.shape)
 
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.x.shape[:2]
+
     def value(self, name):
         key = ("v", name)
         if key not in self._cache:
@@ -177,6 +186,7 @@ class Assembler:
         self.rule = fe.rule(dim, quad_degree or 2 * pmax)
         self._tabs = {p: _Tab(dim, p, self.rule.points) for p in (1, 2)}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
+        self._ref_cache = {}
         self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in model.facets}
         self._build_pattern()
 
@@ -281,16 +291,15 @@ class Assembler:
     # -- Jacobian -------------------------------------------------------------
     def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
         """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot."""
-        vals = []
+        out = np.empty(self._keep.size)
+        pos = 0
         for jb in self.model.jacobians:
-            parts = []
+            factor = self.scales[jb.trial].scale / self.scales[jb.test].rscale
             for cells in self._chunks():
                 ctx = CellContext(self, cells, xl, xdl, t, shift)
-                parts.append(self._cell_block(jb, ctx, cells).ravel())
-            if not parts:
-                continue
-            vals.append(np.concatenate(parts) *
-                        (self.scales[jb.trial].scale / self.scales[jb.test].rscale))
+                K = self._cell_block(jb, ctx, cells).ravel()
+                np.multiply(K, factor, out=out[pos:pos + K.size])
+                pos += K.size
         for ft in self.model.facets:
             if ft.g0 is None:
                 continue
@@ -298,10 +307,10 @@ class Assembler:
             for fb in self._facets[ft.boundary]:
                 ctx = FacetContext(self, fb, xl, xdl, t, shift)
                 phi = fb.tabs[self.disc.field(ft.field).degree].phi
-                K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi)
-                vals.append(K.ravel() * (sc.scale / sc.rscale))
-        v = np.concatenate(vals) if vals else np.zeros(0)
-        return v if self._all_kept else v[self._keep]
+                K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi).ravel()
+                np.multiply(K, sc.scale / sc.rscale, out=out[pos:pos + K.size])
+                pos += K.size
+        return out if self._all_kept else out[self._keep]
 
     @staticmethod
     def _mass_like(g0w, phiF, phiG):
@@ -311,48 +320,80 @@ class Assembler:
         K = g0w.transpose(0, 2, 3, 1).reshape(nc * m * n, nq) @ M0
         return K.reshape(nc, m, n, phiF.shape[1], phiG.shape[1]).transpose(0, 3, 1, 4, 2)
 
+    def _reference_tensors(self, degF, degG):
+        """Products of reference basis functions/gradients per quadrature point
+        (``q``) and summed with the rule's weights (``w``, for coefficients
+        that are constant over each cell).  Cached per pair of degrees."""
+        key = (degF, degG)
+        if key not in self._ref_cache:
+            tF, tG = self._tabs[degF], self._tabs[degG]
+            nq, d = self.rule.weights.size, self.mesh.dim
+            w = self.rule.weights
+            DF = tF.dphi.transpose(0, 2, 1)                                   # (nq, d, nbF)
+            DG = tG.dphi.transpose(0, 2, 1)
+            M0 = tF.phi[:, :, None] * tG.phi[:, None, :]                       # (q, i, j)
+            M1 = tF.phi[:, None, :, None] * DG[:, :, None, :]                  # (q, l, i, j)
+            M2 = DF[:, :, :, None] * tG.phi[:, None, None, :]                  # (q, k, i, j)
+            M3 = DF[:, :, None, :, None] * DG[:, None, :, None, :]             # (q, k, l, i, j)
+            ref = {}
+            for name, M in (("0", M0), ("1", M1), ("2", M2), ("3", M3), ("L", DF)):
+                ref[name, False] = M.reshape(nq * int(np.prod(M.shape[1:-2 if name != "L" else -1])), -1)
+                Mw = np.tensordot(w, M, axes=(0, 0))
+                ref[name, True] = Mw.reshape(int(np.prod(Mw.shape[:-2 if name != "L" else -1])), -1)
+            self._ref_cache[key] = ref
+        return self._ref_cache[key]
+
+    @staticmethod
+    def _at_quadrature(raw, nc, nq, tail):
+        """Broadcast a kernel result; a size-1 quadrature axis means 'constant over
+        the cell' and is kept, so that the weighted reference tensor is used."""
+        raw = np.asarray(raw)
+        const = raw.ndim == 2 + len(tail) and raw.shape[1] == 1
+        return np.broadcast_to(raw, (nc, 1 if const else nq) + tail), const
+
     def _cell_block(self, jb, ctx, cells):
-        tF, tG = self.tab(jb.test), self.tab(jb.trial)
+        fF, fG = self.disc.field(jb.test), self.disc.field(jb.trial)
+        ref = self._reference_tensors(fF.degree, fG.degree)
+        Jinv, JinvT = ctx.Jinv, np.swapaxes(ctx.Jinv, 1, 2)
         W = self.W[cells]
-        Jinv = ctx.Jinv
-        nc = W.shape[0]
-        nbF, nbG = tF.phi.shape[1], tG.phi.shape[1]
-        m, n = self.disc.field(jb.test).ncomp, self.disc.field(jb.trial).ncomp
-        nq, d = W.shape[1], self.mesh.dim
-        K = np.zeros((nc, m, n, nbF, nbG))
+        absdet = np.abs(self.mesh.detJ[cells])[:, None]
+        nc, nq, d = W.shape[0], W.shape[1], self.mesh.dim
+        nbF, nbG = self.tab(jb.test).phi.shape[1], self.tab(jb.trial).phi.shape[1]
+        m, n = fF.ncomp, fG.ncomp
+        K = np.zeros((nc * m * n, nbF * nbG))
+
+        def weights(const):
+            return absdet if const else W
+
         if jb.g0 is not None:
-            g = W[:, :, None, None] * np.broadcast_to(jb.g0(ctx), (nc, nq, m, n))
-            M0 = (tF.phi[:, :, None] * tG.phi[:, None, :]).reshape(nq, -1)
-            K += (g.transpose(0, 2, 3, 1).reshape(nc * m * n, nq) @ M0).reshape(K.shape)
+            g, c = self._at_quadrature(jb.g0(ctx), nc, nq, (m, n))
+            g = g * weights(c)[:, :, None, None]
+            K += g.transpose(0, 2, 3, 1).reshape(nc * m * n, -1) @ ref["0", c]
         if jb.g1 is not None:
-            g = np.einsum("cqabe,cle->cabql", np.broadcast_to(jb.g1(ctx), (nc, nq, m, n, d)),
-                          Jinv) * W[:, None, None, :, None]
-            M1 = (tF.phi[:, None, :, None] * tG.dphi.transpose(0, 2, 1)[:, :, None, :]).reshape(nq * d, -1)
-            K += (g.reshape(nc * m * n, nq * d) @ M1).reshape(K.shape)
-        if jb.g2 is not None or jb.g2_lap is not None:
-            D2 = tF.dphi.transpose(0, 2, 1)                                   # (nq, d, nbF)
-            if jb.g2 is not None:
-                g = np.einsum("cqaeb,cke->cabqk", np.broadcast_to(jb.g2(ctx), (nc, nq, m, d, n)),
-                              Jinv) * W[:, None, None, :, None]
-                M2 = (D2[:, :, :, None] * tG.phi[:, None, None, :]).reshape(nq * d, -1)
-                K += (g.reshape(nc * m * n, nq * d) @ M2).reshape(K.shape)
-            if jb.g2_lap is not None:
-                g = np.einsum("cqaeb,cke->cabqk", np.broadcast_to(jb.g2_lap(ctx), (nc, nq, m, d, n)),
-                              Jinv) * W[:, None, None, :, None]
-                T = (g.reshape(nc * m * n, nq * d) @ D2.reshape(nq * d, nbF)).reshape(nc, m, n, nbF)
-                lap = self.basis_laplacian(jb.trial, cells)                 # (nc, nbG)
-                K += T[..., None] * lap[:, None, None, None, :]
+            g, c = self._at_quadrature(jb.g1(ctx), nc, nq, (m, n, d))
+            g = np.einsum("cqabe,cle->cabql", g, Jinv) * weights(c)[:, None, None, :, None]
+            K += g.reshape(nc * m * n, -1) @ ref["1", c]
+        if jb.g2 is not None:
+            g, c = self._at_quadrature(jb.g2(ctx), nc, nq, (m, d, n))
+            g = np.einsum("cqaeb,cke->cabqk", g, Jinv) * weights(c)[:, None, None, :, None]
+            K += g.reshape(nc * m * n, -1) @ ref["2", c]
+        if jb.g2_lap is not None:
+            g, c = self._at_quadrature(jb.g2_lap(ctx), nc, nq, (m, d, n))
+            g = np.einsum("cqaeb,cke->cabqk", g, Jinv) * weights(c)[:, None, None, :, None]
+            T = g.reshape(nc * m * n, -1) @ ref["L", c]                       # (nc m n, nbF)
+            lap = self.basis_laplacian(jb.trial, cells)                       # (nc, nbG)
+            K += (T.reshape(nc, m * n, nbF, 1) * lap[:, None, None, :]).reshape(K.shape)
         if jb.g3 is not None:
-            g3 = np.broadcast_to(jb.g3(ctx), (nc, nq, m, d, n, d))
-            JinvT = np.swapaxes(Jinv, 1, 2)
+            g, c = self._at_quadrature(jb.g3(ctx), nc, nq, (m, d, n, d))
             if m == 1 and n == 1:   # J^-1 g3 J^-T per quadrature point, as batched matmul
-                g = (Jinv[:, None] @ g3[:, :, 0, :, 0, :] @ JinvT[:, None]) * W[:, :, None, None]
+                g = Jinv[:, None] @ g[:, :, 0, :, 0, :] @ JinvT[:, None]
+                g = g * weights(c)[:, :, None, None]
             else:
-                g = Jinv[:, None, None, None] @ g3.transpose(0, 1, 2, 4, 3, 5) @ JinvT[:, None, None, None]
-                g = (g * W[:, :, None, None, None, None]).transpose(0, 2, 3, 1, 4, 5)
-            M3 = np.einsum("qik,qjl->qklij", tF.dphi, tG.dphi).reshape(nq * d * d, -1)
-            K += (g.reshape(nc * m * n, nq * d * d) @ M3).reshape(K.shape)
-        return K.transpose(0, 3, 1, 4, 2)                                   # (nc, nbF, m, nbG, n)
+                g = Jinv[:, None, None, None] @ g.transpose(0, 1, 2, 4, 3, 5) @ JinvT[:, None, None, None]
+                g = (g * weights(c)[:, :, None, None, None, None]).transpose(0, 2, 3, 1, 4, 5)
+            K += g.reshape(nc * m * n, -1) @ ref["3", c]
+        K = K.reshape(nc, m, n, nbF, nbG)
+        return K if m == 1 and n == 1 else K.transpose(0, 3, 1, 4, 2)      # (nc, nbF, m, nbG, n)
 
     # -- functionals ------------------------------------------------------------
     def error_norms(self, xl, name: str, exact: Callable, exact_grad: Callable, t: float,

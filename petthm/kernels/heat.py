@@ -44,7 +44,7 @@ class HeatCoefficients:
 def _velocity(c: HeatCoefficients, ctx):
     if c.velocity is None or c.fluid_rho_c == 0.0:
         return None
-    return np.broadcast_to(c.velocity(ctx.x, ctx.t), ctx.x.shape)
+    return np.broadcast_to(c.velocity(ctx.x, ctx.t), ctx.shape + (ctx.dim,))
 
 
 def _tau(c: HeatCoefficients, ctx, v):
@@ -85,7 +85,7 @@ def f1_T(c: HeatCoefficients, name: str, ctx):
 
 
 def g0_TT(c, name, ctx):
-    return np.full(ctx.x.shape[:2] + (1, 1), c.rho_c * ctx.shift)
+    return np.full((1, 1, 1, 1), c.rho_c * ctx.shift)     # constant over the cell
 
 
 def g1_TT(c, name, ctx):
@@ -105,7 +105,7 @@ def g2lap_TT(c, name, ctx):
 
 def g3_TT(c, name, ctx):
     d = ctx.dim
-    g = np.broadcast_to(c.conductivity * np.eye(d), ctx.x.shape[:2] + (d, d))
+    g = (c.conductivity * np.eye(d))[None, None]                # constant over the cell
     v = _velocity(c, ctx)
     if c.supg and v is not None:
         tau, w = _tau(c, ctx, v)
@@ -117,17 +117,17 @@ def g3_TT(c, name, ctx):
 def neumann(name: str, boundary: str, inflow: PointFunction) -> FacetTerm:
     """Prescribed heat inflow q_N (W/m2) through a boundary part."""
     def f0(ctx):
-        return -np.broadcast_to(inflow(ctx.x, ctx.t), ctx.x.shape[:2])[..., None]
+        return -np.broadcast_to(inflow(ctx.x, ctx.t), ctx.shape)[..., None]
     return FacetTerm(name, boundary, f0, None)
 
 
 def robin(name: str, boundary: str, h: float, t_ext: PointFunction) -> FacetTerm:
     """Heat loss h (T - T_ext) (W/m2) through a boundary part."""
     def f0(ctx):
-        return h * (ctx.value(name) - np.broadcast_to(t_ext(ctx.x, ctx.t), ctx.x.shape[:2])[..., None])
+        return h * (ctx.value(name) - np.broadcast_to(t_ext(ctx.x, ctx.t), ctx.shape)[..., None])
 
     def g0(ctx):
-        return np.full(ctx.x.shape[:2] + (1, 1), h)
+        return np.full((1, 1, 1, 1), h)
     return FacetTerm(name, boundary, f0, g0)
 
 
