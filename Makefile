@@ -11,15 +11,14 @@ demo: setup
 	$(MPI_ENV) $(PY) -m petthm heat_erfc -options_file options/scenes/heat_erfc.opts
 
 test: setup
-	$(MPI_ENV) $(PY) -m pytest -q
+	bash scripts/run_tests.sh
 
 test-slow: setup
 	$(MPI_ENV) $(PY) -m pytest -q -m slow
 
-# Build PETSc 3.26.1 + petsc4py from PyPI into .venv-petsc-3.26 and run the fast tests there
-test-petsc-newest:
-	bash scripts/install_petsc_pypi.sh .venv-petsc-3.26
-	$(MPI_ENV) .venv-petsc-3.26/bin/python -m pytest -q
+# Build (or reuse) PETSc 3.26.1 + petsc4py from PyPI and run the suite against it too
+test-petsc-newest: setup
+	PETTHM_TEST_NEWEST=1 bash scripts/run_tests.sh
 
 clean:
 	rm -rf output .pytest_cache

@@ -42,6 +42,30 @@ class FieldScale:
     rscale: float = 1.0
 
 
+def physical_gradient(G, Jinv):
+    """grad[c,q,m,a] = sum_k G[c,q,k,m] Jinv[c,k,a] for reference gradients G (nc,nq,d,m).
+
+    Written as d broadcast multiply-adds: numpy's batched matmul is slow for
+    millions of 3x3 products."""
+    d = Jinv.shape[1]
+    out = G[:, :, 0, :, None] * Jinv[:, None, None, 0, :]
+    for k in range(1, d):
+        out += G[:, :, k, :, None] * Jinv[:, None, None, k, :]
+    return out
+
+
+def reference_flux(f1, Jinv):
+    """f1ref[c,q,k,m] = sum_a Jinv[c,k,a] f1[c,q,m,a] (a physical flux mapped to the reference cell)."""
+    d = Jinv.shape[1]
+    out = np.empty(f1.shape[:2] + (d, f1.shape[2]))
+    for k in range(d):
+        acc = f1[..., 0] * Jinv[:, None, None, k, 0]
+        for a in range(1, d):
+            acc += f1[..., a] * Jinv[:, None, None, k, a]
+        out[:, :, k, :] = acc
+    return out
+
+
 class _Tab:
     """Reference tabulation of one element degree on one rule."""
 
@@ -118,7 +142,7 @@ class CellContext:
             X = self._nodal(name)
             nc, nq, d = X.shape[0], tab.phi.shape[0], self.dim
             G = (tab.D @ X).reshape(nc, nq, d, -1)                   # (nc, nq, k, m)
-            self._cache[key] = np.einsum("cqkm,cka->cqma", G, self.Jinv)
+            self._cache[key] = physical_gradient(G, self.Jinv)
         return self._cache[key]
 
     def lap(self, name):
@@ -273,7 +297,7 @@ class Assembler:
                     r = tab.phi.T @ (W[:, :, None] * term.f0(ctx))          # (nc, nb, m)
                 if term.f1 is not None:
                     f1 = term.f1(ctx)                                       # (nc, nq, m, d)
-                    f1ref = np.einsum("cka,cqma->cqkm", ctx.Jinv, W[:, :, None, None] * f1)
+                    f1ref = reference_flux(W[:, :, None, None] * f1, ctx.Jinv)
                     r = r + tab.D.T @ f1ref.reshape(nc, -1, f1.shape[2])
                 self._scatter(out, term.field, cells, r)
         for ft in self.model.facets:
