@@ -23,8 +23,11 @@
 # Solver: newtonls with basic line search, -ksp_type preonly -pc_type none (the "solve" is a copy)
 #   and all tolerances 0 so exactly NIT Newton steps run: NIT Jacobians and NIT+1 residuals.
 #   The matrix is created and its nonzero pattern filled (DMPlexPrealloc) before the first
-#   Jacobian, so call 1 does no mallocs; it was ~10% slower than calls 2..n (cold caches), and the
-#   reported per-call time averages all NIT calls (raise NIT to weight re-assembly more).
+#   Jacobian, so call 1 does no mallocs; still it was ~10% slower than later calls (ex12, 10k cells,
+#   -log_trace: 0.58 s vs 0.52, 0.51 s). The per-call time averages all NIT calls.
+# Quadrature: PETSc's default for P2 tets, 27-point collapsed Gauss-Jacobi (petthm: 14 points).
+# ex17 is slow in 3.18: PetscFE treats a 3-component P2 space as 30 vector-valued basis functions
+#   and the element-matrix update loops over all (basis x component)^2 pairs (~81x ex12's work).
 set -euo pipefail
 meshes=(); for m in "$@"; do meshes+=("$(realpath "$m")"); done
 cd "$(dirname "$0")/.."

@@ -167,3 +167,92 @@ def unused_options() -> list[str]:
     _check(restore(None, ctypes.byref(n), ctypes.byref(names), ctypes.byref(values)),
            "PetscOptionsLeftRestore")
     return [s[1:] if s.startswith("-") else s for s in out]
+
+
+# --------------------------------------------------------------------------
+# Cohesive cells (not wrapped by petsc4py, or wrapped with a varying signature)
+# --------------------------------------------------------------------------
+_VP = ctypes.c_void_p
+
+
+@functools.lru_cache(maxsize=None)
+def _capsule(name: str):
+    """A petsc4py C-API constructor, e.g. PyPetscDM_New(DM) -> petsc4py object."""
+    cap = PETSc.__pyx_capi__[name]
+    api = ctypes.pythonapi
+    api.PyCapsule_GetName.restype = ctypes.c_char_p
+    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+    api.PyCapsule_GetPointer.restype = _VP
+    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+    ptr = api.PyCapsule_GetPointer(cap, api.PyCapsule_GetName(cap))
+    return ctypes.PYFUNCTYPE(ctypes.py_object, _VP)(ptr)
+
+
+def _adopt(handle: int, kind: str):
+    """Wrap a C object we own as a petsc4py object (which takes its own reference)."""
+    obj = _capsule(f"PyPetsc{kind}_New")(handle)
+    _check(_cfunc("PetscObjectDereference", _VP)(handle), "PetscObjectDereference")
+    return obj
+
+
+def create_submesh(dm: PETSc.DMPlex, label: PETSc.DMLabel, value: int) -> PETSc.DMPlex:
+    """DMPlexCreateSubmesh(dm, label, value, markedFaces=TRUE)."""
+    out = _VP()
+    fn = _cfunc("DMPlexCreateSubmesh", _VP, _VP, _c_petscint, ctypes.c_int, ctypes.POINTER(_VP))
+    _check(fn(dm.handle, label.handle, value, 1, ctypes.byref(out)), "DMPlexCreateSubmesh")
+    return _adopt(out.value, "DM")
+
+
+def subpoint_label(subdm: PETSc.DMPlex) -> PETSc.DMLabel:
+    """A copy of the submesh's subpoint map (value = depth of each parent point)."""
+    out = _VP()
+    _check(_cfunc("DMPlexGetSubpointMap", _VP, ctypes.POINTER(_VP))(subdm.handle, ctypes.byref(out)),
+           "DMPlexGetSubpointMap")
+    return _capsule("PyPetscDMLabel_New")(out.value).duplicate()   # borrowed: New() takes a ref
+
+
+def label_cohesive_complete(dm, label, tip, flip: bool, subdm) -> None:
+    """DMPlexLabelCohesiveComplete; a NULL boundary label when ``tip`` is empty
+    (an empty label segfaults in PETSc 3.18 and petsc4py refuses None)."""
+    if tip is not None and tip.getStratumSize(1) > 0:
+        dm.labelCohesiveComplete(label, tip, 1, flip, subdm)
+        return
+    if (3, 22) <= VERSION < (3, 26):
+        fn = _cfunc("DMPlexLabelCohesiveComplete", _VP, _VP, _VP, _c_petscint, ctypes.c_int,
+                    ctypes.c_int, _VP)
+        ierr = fn(dm.handle, label.handle, None, 1, int(flip), 0, subdm.handle)
+    else:
+        fn = _cfunc("DMPlexLabelCohesiveComplete", _VP, _VP, _VP, _c_petscint, ctypes.c_int, _VP)
+        ierr = fn(dm.handle, label.handle, None, 1, int(flip), subdm.handle)
+    _check(ierr, "DMPlexLabelCohesiveComplete")
+
+
+def construct_cohesive_cells(dm: PETSc.DMPlex, label: PETSc.DMLabel) -> PETSc.DMPlex:
+    """DMPlexConstructCohesiveCells(dm, label, NULL): the split mesh."""
+    out = _VP()
+    fn = _cfunc("DMPlexConstructCohesiveCells", _VP, _VP, _VP, ctypes.POINTER(_VP))
+    _check(fn(dm.handle, label.handle, None, ctypes.byref(out)), "DMPlexConstructCohesiveCells")
+    return _adopt(out.value, "DM")
+
+
+def simplex_range(dm: PETSc.DMPlex, height: int) -> tuple[int, int]:
+    """Points of a height stratum that are not hybrid (cohesive/prism-tensor) points."""
+    a, b = _c_petscint(), _c_petscint()
+    fn = _cfunc("DMPlexGetSimplexOrBoxCells", _VP, _c_petscint, ctypes.POINTER(_c_petscint),
+                ctypes.POINTER(_c_petscint))
+    _check(fn(dm.handle, height, ctypes.byref(a), ctypes.byref(b)), "DMPlexGetSimplexOrBoxCells")
+    return a.value, b.value
+
+
+def plex_checks(dm: PETSc.DMPlex) -> dict[str, int]:
+    """DMPlexCheck{Symmetry,Skeleton,Faces,Geometry,PointSF,InterfaceCones}: 0 = pass."""
+    out = {
+        "symmetry": _cfunc("DMPlexCheckSymmetry", _VP)(dm.handle),
+        "skeleton": _cfunc("DMPlexCheckSkeleton", _VP, _c_petscint)(dm.handle, 0),
+        "faces": _cfunc("DMPlexCheckFaces", _VP, _c_petscint)(dm.handle, 0),
+        "geometry": _cfunc("DMPlexCheckGeometry", _VP)(dm.handle),
+        "interface_cones": _cfunc("DMPlexCheckInterfaceCones", _VP)(dm.handle),
+    }
+    if VERSION >= (3, 17):
+        out["point_sf"] = _cfunc("DMPlexCheckPointSF", _VP, _VP, ctypes.c_int)(dm.handle, None, 0)
+    return out

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+
+import numpy as np
 from typing import Sequence
 
 
@@ -98,6 +100,90 @@ def box(path: str, lengths: Sequence[float], size: float, grading: Grading | Non
     gmsh.option.setNumber("Mesh.MeshSizeMin", (grading.size_min if grading else size))
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     _grade(gmsh, dim, lengths, size, grading)
+    return _write(gmsh, dim, path)
+
+
+#: physical-group tag of fracture ``i`` (PETSc reads it into the "Face Sets" label)
+FRACTURE_TAG0 = 10
+
+
+@dataclass(frozen=True)
+class Fracture:
+    """A planar fracture: a segment (2D: ``p0``, ``p1``) or, in 3D, a disc
+    (``center``, ``radius``) or rectangle (``center``, ``half`` sizes) lying in
+    the plane z = center_z, then rotated by ``dip`` degrees about the
+    ``strike`` axis (0: x, 1: y) through its centre."""
+    kind: str
+    p0: tuple = ()
+    p1: tuple = ()
+    center: tuple = ()
+    radius: float = 0.0
+    half: tuple = ()
+    dip: float = 0.0
+    strike: int = 0
+    size: float = 0.0          # mesh size on the fracture (0: the nominal size)
+
+
+def _add_fracture(gmsh, f: Fracture):
+    occ = gmsh.model.occ
+    if f.kind == "segment":
+        return (1, occ.addLine(occ.addPoint(*f.p0, 0.0), occ.addPoint(*f.p1, 0.0)))
+    c = f.center
+    if f.kind == "disc":
+        tag = occ.addDisk(c[0], c[1], c[2], f.radius, f.radius)
+    elif f.kind == "rectangle":
+        tag = occ.addRectangle(c[0] - f.half[0], c[1] - f.half[1], c[2], 2 * f.half[0], 2 * f.half[1])
+    else:
+        raise ValueError(f"unknown fracture kind '{f.kind}'")
+    if f.dip:
+        axis = [1.0, 0.0, 0.0] if f.strike == 0 else [0.0, 1.0, 0.0]
+        occ.rotate([(2, tag)], c[0], c[1], c[2], *axis, np.deg2rad(f.dip))
+    return (2, tag)
+
+
+def box_with_fractures(path: str, lengths: Sequence[float], size: float,
+                       fractures: Sequence[Fracture], grading_distance: float = 0.0) -> str:
+    """Box (or rectangle) with embedded fractures; the mesh conforms to them.
+
+    Physical groups: the domain (cells, tag 1) and fracture ``i`` (facets, tag
+    ``FRACTURE_TAG0 + i``).  With ``grading_distance`` > 0 the size grows
+    linearly from each fracture's ``size`` to ``size`` over that distance.
+    """
+    dim = len(lengths)
+    gmsh = _start("fractured_box")
+    occ = gmsh.model.occ
+    dom = occ.addRectangle(0, 0, 0, *lengths) if dim == 2 else occ.addBox(0, 0, 0, *lengths)
+    tools = [_add_fracture(gmsh, f) for f in fractures]
+    _, mapping = occ.fragment([(dim, dom)], tools)
+    occ.synchronize()
+    cells = [t for (d, t) in mapping[0] if d == dim]
+    gmsh.model.addPhysicalGroup(dim, cells, 1)
+    for i, m in enumerate(mapping[1:]):
+        ents = [t for (d, t) in m if d == dim - 1]
+        gmsh.model.addPhysicalGroup(dim - 1, ents, FRACTURE_TAG0 + i)
+    fine = [f.size or size for f in fractures]
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", min(fine))
+    if grading_distance > 0:
+        mf = gmsh.model.mesh.field
+        fields = []
+        for f, m in zip(fractures, mapping[1:]):
+            ents = [t for (d, t) in m if d == dim - 1]
+            dist = mf.add("Distance")
+            mf.setNumbers(dist, "CurvesList" if dim == 2 else "SurfacesList", ents)
+            mf.setNumber(dist, "Sampling", 100)
+            thr = mf.add("Threshold")
+            mf.setNumber(thr, "InField", dist)
+            mf.setNumber(thr, "SizeMin", f.size or size)
+            mf.setNumber(thr, "SizeMax", size)
+            mf.setNumber(thr, "DistMin", 0.0)
+            mf.setNumber(thr, "DistMax", grading_distance)
+            fields.append(thr)
+        mn = mf.add("Min")
+        mf.setNumbers(mn, "FieldsList", fields)
+        mf.setAsBackgroundMesh(mn)
+        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     return _write(gmsh, dim, path)
 
 

@@ -49,3 +49,10 @@ def test_log_view_shows_the_stages(tmp_path):
     for stage in ("mesh", "setup", "solve", "output"):
         assert f": {stage}:" in proc.stdout or f"{stage}:" in proc.stdout
     assert "thm.jacobian" in proc.stdout and "thm.residual" in proc.stdout
+
+
+def test_dm_refine_refines_uniformly(tmp_path):
+    _, coarse = run_petthm("heat_mms", tmp_path / "c", "-thm_mesh_size", 0.25)
+    _, fine = run_petthm("heat_mms", tmp_path / "f", "-thm_mesh_size", 0.25, "-dm_refine", 1)
+    assert fine["cells"] == 4 * coarse["cells"]
+    assert fine["error"]["Tm_l2"] < coarse["error"]["Tm_l2"] / 6     # P2: ~8x per halving
