@@ -40,3 +40,12 @@ def fitted_slope(h, e):
 @pytest.fixture
 def petthm_run():
     return run_petthm
+
+
+def pytest_unconfigure(config):
+    """Empty the options database that in-process tests filled (newer PETSc
+    lists unused options at exit)."""
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    for key in list(opts.getAll()):
+        opts.delValue(key)
