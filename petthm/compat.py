@@ -256,3 +256,26 @@ def plex_checks(dm: PETSc.DMPlex) -> dict[str, int]:
     if VERSION >= (3, 17):
         out["point_sf"] = _cfunc("DMPlexCheckPointSF", _VP, _VP, ctypes.c_int)(dm.handle, None, 0)
     return out
+
+
+def create_section(dm, labels, num_comp, num_dof, bc_field, bc_comps, bc_points) -> PETSc.Section:
+    """DMPlexCreateSection; ``labels`` (one per field, or None) restrict each
+    field to the points with label value 1 (petsc4py does not pass labels)."""
+    if all(lab is None for lab in labels):
+        return dm.createSection(num_comp, num_dof, bc_field or None, bc_comps or None,
+                                bc_points or None)
+    nf = len(num_comp)
+    lab_arr = (_VP * nf)(*[None if lab is None else lab.handle for lab in labels])
+    comp = np.ascontiguousarray(num_comp, dtype=INT)
+    dof = np.ascontiguousarray(num_dof, dtype=INT)
+    nbc = len(bc_field)
+    bcf = np.ascontiguousarray(bc_field, dtype=INT) if nbc else np.zeros(1, dtype=INT)
+    bcc = (_VP * max(nbc, 1))(*[i.handle for i in bc_comps])
+    bcp = (_VP * max(nbc, 1))(*[i.handle for i in bc_points])
+    out = _VP()
+    fn = _cfunc("DMPlexCreateSection", _VP, _VP, _c_int_p, _c_int_p, _c_petscint, _c_int_p,
+                _VP, _VP, _VP, ctypes.POINTER(_VP))
+    _check(fn(dm.handle, ctypes.cast(lab_arr, _VP), comp, dof, nbc, bcf,
+              ctypes.cast(bcc, _VP), ctypes.cast(bcp, _VP), None, ctypes.byref(out)),
+           "DMPlexCreateSection")
+    return _adopt(out.value, "Section")

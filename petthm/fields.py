@@ -16,7 +16,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from . import compat, fe
-from .mesh import Mesh
+from .mesh import Mesh, simplex_stratum
 
 
 @dataclass(frozen=True)
@@ -80,11 +80,26 @@ class Discretisation:
                                                          comm=PETSc.COMM_SELF))
                 bc_is.append(PETSc.IS().createGeneral(bc_points[f.name], comm=PETSc.COMM_SELF))
         self.dm.setNumFields(len(self.fields))
-        sec = self.dm.createSection(num_comp, num_dof.ravel(), bc_field or None,
-                                         bc_comps or None, bc_is or None)
+        support = self._support_label()
+        sec = compat.create_section(self.dm, [support] * len(self.fields), num_comp, num_dof.ravel(),
+                                    bc_field, bc_comps, bc_is)
+        if support is not None:
+            support.destroy()
         for i, f in enumerate(self.fields):
             sec.setFieldName(i, f.name)
         return sec
+
+    def _support_label(self) -> PETSc.DMLabel | None:
+        """None on a purely simplicial mesh; else a label (value 1) on the
+        simplex vertices and edges, so that no dofs go onto the prism-tensor
+        edges of cohesive cells."""
+        lo, hi = simplex_stratum(self.dm, 1)
+        if hi == self.dm.getDepthStratum(1)[1]:
+            return None
+        label = PETSc.DMLabel().create("thm_support")
+        pts = np.concatenate([np.arange(*self.dm.getDepthStratum(0)), np.arange(lo, hi)])
+        label.setStratumIS(1, PETSc.IS().createGeneral(pts.astype(compat.INT), comm=PETSc.COMM_SELF))
+        return label
 
     def _point_offsets(self) -> dict[str, np.ndarray]:
         """Local offset of each field's first dof at each vertex/edge point.
@@ -100,7 +115,7 @@ class Discretisation:
         for f in self.fields:
             fdof = np.zeros(pend - pstart, dtype=np.int64)
             for d in self.depths[f.name]:
-                lo, hi = m.dm.getDepthStratum(d)
+                lo, hi = simplex_stratum(self.dm, d)
                 fdof[lo - pstart:hi - pstart] = f.ncomp
             fstart[f.name] = ndof.copy()
             ndof += fdof
@@ -136,15 +151,17 @@ class Discretisation:
     def nodes_per_cell(self, name: str) -> int:
         return fe.nodes_per_cell(self.mesh.dim, self.field(name).degree)
 
+    def node_points(self, name: str) -> np.ndarray:
+        """The mesh points carrying the field's nodes: vertices (+ simplex edges for P2)."""
+        return np.concatenate([np.arange(*simplex_stratum(self.dm, d)) for d in self.depths[name]])
+
     def field_local_dofs(self, name: str) -> np.ndarray:
         """All local dof indices of a field (vertex and edge points), (n, ncomp)."""
         f = self.field(name)
-        pts = np.concatenate([np.arange(*self.mesh.dm.getDepthStratum(d)) for d in self.depths[name]])
-        return self.offsets[name][pts - self.pstart][:, None] + np.arange(f.ncomp)
+        return self.offsets[name][self.node_points(name) - self.pstart][:, None] + np.arange(f.ncomp)
 
     def field_node_coordinates(self, name: str) -> np.ndarray:
-        pts = np.concatenate([np.arange(*self.mesh.dm.getDepthStratum(d)) for d in self.depths[name]])
-        return self.mesh.point_coordinates(pts)
+        return self.mesh.point_coordinates(self.node_points(name))
 
     def global_sizes(self) -> dict[str, int]:
         """Number of unknowns per field (global, constrained dofs excluded)."""

@@ -75,7 +75,7 @@ class _VertexTopology:
         self.dm = dm
         self.dim = dm.getDimension()
         self.vstart, self.vend = dm.getDepthStratum(0)
-        self.cones = {d: compat.plex_cone_array(dm, *dm.getDepthStratum(d), _cone_size(self.dim, d))
+        self.cones = {d: compat.plex_cone_array(dm, *simplex_stratum(dm, d), _cone_size(self.dim, d))
                       for d in range(1, self.dim + 1)}
         self.starts = {d: dm.getDepthStratum(d)[0] for d in range(0, self.dim + 1)}
         cdim = dm.getCoordinateDim()
@@ -98,6 +98,14 @@ class _VertexTopology:
         for d in range(depth, 1, -1):
             cur = self.cones[d][(cur - self.starts[d]).ravel()].reshape(len(points), -1)
         return _unique_rows(cur, len(fe.EDGES[depth]))
+
+
+def simplex_stratum(dm: PETSc.DMPlex, depth: int) -> tuple[int, int]:
+    """The simplex points of a depth stratum: after a cohesive split the hybrid
+    (prism-tensor) points follow them at the end of each stratum."""
+    if depth == 0:
+        return dm.getDepthStratum(0)
+    return compat.simplex_range(dm, dm.getDimension() - depth)
 
 
 def _cone_size(dim: int, depth: int) -> int:
@@ -143,9 +151,9 @@ class Mesh:
         self.dim = dim = dm.getDimension()
         topo = _VertexTopology(dm)
         self._topo = topo
-        self.cstart, self.cend = dm.getHeightStratum(0)
+        self.cstart, self.cend = simplex_stratum(dm, dim)
         self.vstart, self.vend = dm.getDepthStratum(0)
-        self.estart, self.eend = dm.getDepthStratum(1)
+        self.estart, self.eend = simplex_stratum(dm, 1)
         cells = np.arange(self.cstart, self.cend, dtype=compat.INT)
         self.vertex_coords = topo.coords
         self.cell_vertices = topo.point_vertices(cells, dim)
@@ -210,7 +218,7 @@ class Mesh:
             return np.zeros(0, dtype=compat.INT)
         pts = np.asarray(self.dm.getStratumIS(lname, 1).getIndices(), dtype=compat.INT)
         if depth is not None:
-            lo, hi = self.dm.getDepthStratum(depth)
+            lo, hi = simplex_stratum(self.dm, depth)
             pts = pts[(pts >= lo) & (pts < hi)]
         return pts
 

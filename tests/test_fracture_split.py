@@ -80,3 +80,46 @@ def test_split_distributed_matches_serial(meshes, name, ranks):
         assert dis[key] == ser[key], key
     assert dis["orientation_errors"] == 0 and dis["plex_checks_failed"] == 0
     assert dis["pair_mismatch"] == 0.0
+
+
+def _heat_on(path, split):
+    """Cool the bottom of a square for 1e6 s; returns node y and T (K)."""
+    import numpy as np
+    from petsc4py import PETSc
+    from petthm import fracture as F
+    from petthm.assembly import FieldScale
+    from petthm.fields import Discretisation
+    from petthm.kernels import heat
+    from petthm.mesh import Mesh, distribute, label_boundaries, read_plex
+    from petthm.solver import (SOLVER_DEFAULTS, Dirichlet, Problem, StepControl, TimeStepper,
+                               propose_defaults)
+    dm = read_plex(str(path), PETSc.COMM_WORLD)
+    label_boundaries(dm, {"bottom": lambda x: np.isclose(x[:, 1], 0.0)})
+    if split:
+        dm, _ = F.split_fractures(dm)
+    mesh = Mesh(distribute(dm))
+    model = heat.heat_model(heat.HeatCoefficients(rho_c=1.0, conductivity=0.05, degree=2), "Tm")
+    disc = Discretisation(mesh, model.fields, {"Tm": ["bottom"]})
+    problem = Problem(disc, model, {"Tm": FieldScale(60.0, 353.15)},
+                      [Dirichlet("Tm", "bottom", lambda x, t: np.full(len(x), 293.15))])
+    problem.set_initial({"Tm": lambda x: np.full(len(x), 353.15)})
+    propose_defaults(SOLVER_DEFAULTS)
+    problem.auto_residual_scales(0.0, 1.0)
+    stepper = TimeStepper(problem, StepControl(final_time=4.0, dt_initial=1.0))
+    assert stepper.solve() > 0
+    y = disc.field_node_coordinates("Tm")[:, 1]
+    return y, problem.field_values("Tm")[:, 0]
+
+
+def test_matrix_field_is_discontinuous_across_a_split(meshes, tmp_path):
+    """A fracture cutting the whole square insulates the upper half (the split
+    decouples the duplicated nodes); without the split, heat crosses."""
+    import numpy as np
+    path = M.box_with_fractures(str(tmp_path / "through.msh"), [1, 1], 0.1,
+                                [M.Fracture("segment", p0=(0.0, 0.5), p1=(1.0, 0.5))])
+    y, T = _heat_on(path, split=True)
+    upper = y > 0.5 + 1e-9
+    assert np.abs(T[upper] - 353.15).max() < 1e-8
+    assert T[y < 0.5 - 1e-9].min() < 353.15 - 1.0
+    y, T = _heat_on(path, split=False)
+    assert T[y > 0.5 + 1e-9].min() < 353.15 - 1e-3
