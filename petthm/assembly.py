@@ -56,9 +56,9 @@ def physical_gradient(G, Jinv):
 
 def reference_flux(f1, Jinv):
     """f1ref[c,q,k,m] = sum_a Jinv[c,k,a] f1[c,q,m,a] (a physical flux mapped to the reference cell)."""
-    d = Jinv.shape[1]
-    out = np.empty(f1.shape[:2] + (d, f1.shape[2]))
-    for k in range(d):
+    r, d = Jinv.shape[1], Jinv.shape[2]
+    out = np.empty(f1.shape[:2] + (r, f1.shape[2]))
+    for k in range(r):
         acc = f1[..., 0] * Jinv[:, None, None, k, 0]
         for a in range(1, d):
             acc += f1[..., a] * Jinv[:, None, None, k, a]
@@ -140,8 +140,8 @@ class CellContext:
         if key not in self._cache:
             tab = self._asm.tab(name)
             X = self._nodal(name)
-            nc, nq, d = X.shape[0], tab.phi.shape[0], self.dim
-            G = (tab.D @ X).reshape(nc, nq, d, -1)                   # (nc, nq, k, m)
+            nc, nq, r = X.shape[0], tab.phi.shape[0], self.Jinv.shape[1]
+            G = (tab.D @ X).reshape(nc, nq, r, -1)                   # (nc, nq, k, m)
             self._cache[key] = physical_gradient(G, self.Jinv)
         return self._cache[key]
 
@@ -202,10 +202,13 @@ class Assembler:
     """Residual and Jacobian of a ``Model`` on a ``Discretisation``."""
 
     def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
-                 quad_degree: int | None = None):
-        self.disc, self.model, self.mesh = disc, model, disc.mesh
+                 quad_degree: int | None = None, region=None):
+        """``region``: the elements integrated over, with their affine maps
+        (default: the mesh's cells; or a ``fracture.FractureSurface``)."""
+        self.disc, self.model = disc, model
+        self.mesh = region if region is not None else disc.mesh
         self.scales = scales
-        dim = self.mesh.dim
+        dim = self.mesh.rdim
         pmax = max(f.degree for f in disc.fields)
         self.rule = fe.rule(dim, quad_degree or 2 * pmax)
         self._tabs = {p: _Tab(dim, p, self.rule.points) for p in (1, 2)}
@@ -285,7 +288,6 @@ class Assembler:
     def residual(self, xl: np.ndarray, xdl: np.ndarray, t: float) -> np.ndarray:
         """Local residual vector (scaled) from local solution and its time derivative."""
         out = np.zeros(self.disc.nlocal)
-        d = self.mesh.dim
         for cells in self._chunks():
             ctx = CellContext(self, cells, xl, xdl, t)
             W = self.W[cells]
@@ -351,7 +353,7 @@ class Assembler:
         key = (degF, degG)
         if key not in self._ref_cache:
             tF, tG = self._tabs[degF], self._tabs[degG]
-            nq, d = self.rule.weights.size, self.mesh.dim
+            nq = self.rule.weights.size
             w = self.rule.weights
             DF = tF.dphi.transpose(0, 2, 1)                                   # (nq, d, nbF)
             DG = tG.dphi.transpose(0, 2, 1)
@@ -424,8 +426,8 @@ class Assembler:
                     degree: int = 6) -> dict[str, float]:
         """Global L2 and H1-seminorm errors and norms of the exact field (SI)."""
         m, f = self.mesh, self.disc.field(name)
-        rule = fe.rule(m.dim, max(degree, 2 * f.degree + 2))
-        tab = _Tab(m.dim, f.degree, rule.points)
+        rule = fe.rule(m.rdim, max(degree, 2 * f.degree + 2))
+        tab = _Tab(m.rdim, f.degree, rule.points)
         sc = self.scales[name]
         acc = np.zeros(4)
         for cells in self._chunks():
@@ -433,7 +435,7 @@ class Assembler:
             x = m.x0[cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[cells], rule.points)
             W = np.abs(m.detJ[cells])[:, None] * rule.weights
             u = tab.phi @ X
-            G = np.einsum("cqkm,cka->cqma", (tab.D @ X).reshape(len(X), -1, m.dim, f.ncomp), m.Jinv[cells])
+            G = physical_gradient((tab.D @ X).reshape(len(X), -1, m.rdim, f.ncomp), m.Jinv[cells])
             ue = np.asarray(exact(x, t)).reshape(u.shape)
             ge = np.asarray(exact_grad(x, t)).reshape(G.shape)
             acc += [np.sum(W[:, :, None] * (u - ue) ** 2), np.sum(W[:, :, None] * ue ** 2),

@@ -26,6 +26,7 @@ class FieldSpec:
     name: str
     ncomp: int = 1
     degree: int = 2
+    region: str = "matrix"          # "matrix" (cells) or "fracture" (- faces of cohesive cells)
 
 
 @dataclass
@@ -41,14 +42,17 @@ class Discretisation:
     """The PetscSection of a set of fields on a mesh and its index arrays."""
 
     def __init__(self, mesh: Mesh, fields: Sequence[FieldSpec],
-                 dirichlet: dict[str, Sequence[str]] | None = None, dm: PETSc.DM | None = None):
+                 dirichlet: dict[str, Sequence[str]] | None = None, dm: PETSc.DM | None = None,
+                 regions: dict | None = None):
         self.mesh = mesh
         self.dm = dm or mesh.dm
         self.fields = list(fields)
         self.index = {f.name: i for i, f in enumerate(self.fields)}
+        self.regions = dict(regions or {}, matrix=mesh)
         dirichlet = dirichlet or {}
         dm = self.dm
         self.depths = {f.name: (0, 1) if f.degree == 2 else (0,) for f in self.fields}
+        self.support = {f.name: self._support_points(f) for f in self.fields}
         bc_points = {f.name: self._bc_points(dirichlet.get(f.name, ()), f) for f in self.fields}
         self.section = self._create_section(bc_points)
         compat.set_local_section(dm, self.section)
@@ -61,9 +65,22 @@ class Discretisation:
             raise RuntimeError("local-to-global map does not match the local section")
 
     # -- section --------------------------------------------------------------
+    def _support_points(self, f: FieldSpec) -> np.ndarray:
+        """Sorted points that carry the field's nodes: vertices and (P2) simplex
+        edges of the mesh, or, for a fracture field, of the closure of the - faces
+        (label ``fracture.MINUS_LABEL``, made before distribution so that
+        ranks agree on shared points)."""
+        pts = np.concatenate([np.arange(*simplex_stratum(self.dm, d)) for d in self.depths[f.name]])
+        if f.region == "fracture":
+            from .fracture import MINUS_LABEL
+            on = self.mesh.label_points(None, label=MINUS_LABEL)
+            pts = np.intersect1d(pts, on)
+        return pts.astype(compat.INT)
+
     def _bc_points(self, boundaries, f: FieldSpec) -> np.ndarray:
         pts = [self.mesh.label_points(b, d) for b in boundaries for d in self.depths[f.name]]
-        return np.unique(np.concatenate(pts)).astype(compat.INT) if pts else np.zeros(0, compat.INT)
+        pts = np.unique(np.concatenate(pts)).astype(compat.INT) if pts else np.zeros(0, compat.INT)
+        return np.intersect1d(pts, self.support[f.name]).astype(compat.INT)
 
     def _create_section(self, bc_points) -> PETSc.Section:
         dim = self.mesh.dim
@@ -80,26 +97,30 @@ class Discretisation:
                                                          comm=PETSc.COMM_SELF))
                 bc_is.append(PETSc.IS().createGeneral(bc_points[f.name], comm=PETSc.COMM_SELF))
         self.dm.setNumFields(len(self.fields))
-        support = self._support_label()
-        sec = compat.create_section(self.dm, [support] * len(self.fields), num_comp, num_dof.ravel(),
+        labels = self._support_labels()
+        sec = compat.create_section(self.dm, labels, num_comp, num_dof.ravel(),
                                     bc_field, bc_comps, bc_is)
-        if support is not None:
-            support.destroy()
+        for lab in labels:
+            if lab is not None:
+                lab.destroy()
         for i, f in enumerate(self.fields):
             sec.setFieldName(i, f.name)
         return sec
 
-    def _support_label(self) -> PETSc.DMLabel | None:
-        """None on a purely simplicial mesh; else a label (value 1) on the
-        simplex vertices and edges, so that no dofs go onto the prism-tensor
-        edges of cohesive cells."""
-        lo, hi = simplex_stratum(self.dm, 1)
-        if hi == self.dm.getDepthStratum(1)[1]:
-            return None
-        label = PETSc.DMLabel().create("thm_support")
-        pts = np.concatenate([np.arange(*self.dm.getDepthStratum(0)), np.arange(lo, hi)])
-        label.setStratumIS(1, PETSc.IS().createGeneral(pts.astype(compat.INT), comm=PETSc.COMM_SELF))
-        return label
+    def _support_labels(self) -> list:
+        """Per field None (all vertices/edges of a purely simplicial mesh) or a
+        label (value 1) on its support points, so that no dofs go onto the
+        prism-tensor edges of cohesive cells or off a fracture."""
+        hybrid = simplex_stratum(self.dm, 1)[1] != self.dm.getDepthStratum(1)[1]
+        if not hybrid and all(f.region == "matrix" for f in self.fields):
+            return [None] * len(self.fields)
+        labels = []
+        for f in self.fields:
+            label = PETSc.DMLabel().create(f"thm_support_{f.name}")
+            if self.support[f.name].size:
+                label.setStratumIS(1, PETSc.IS().createGeneral(self.support[f.name], comm=PETSc.COMM_SELF))
+            labels.append(label)
+        return labels
 
     def _point_offsets(self) -> dict[str, np.ndarray]:
         """Local offset of each field's first dof at each vertex/edge point.
@@ -114,9 +135,7 @@ class Discretisation:
         fstart = {}
         for f in self.fields:
             fdof = np.zeros(pend - pstart, dtype=np.int64)
-            for d in self.depths[f.name]:
-                lo, hi = simplex_stratum(self.dm, d)
-                fdof[lo - pstart:hi - pstart] = f.ncomp
+            fdof[self.support[f.name] - pstart] = f.ncomp
             fstart[f.name] = ndof.copy()
             ndof += fdof
         start = np.concatenate([[0], np.cumsum(ndof)[:-1]])
@@ -131,7 +150,9 @@ class Discretisation:
         return offsets
 
     def _element_dofs(self, f: FieldSpec) -> np.ndarray:
-        m = self.mesh
+        m = self.regions.get(f.region)
+        if m is None:
+            return np.zeros((0, 0), dtype=compat.INT)
         points = m.cell_vertices + m.vstart
         if f.degree == 2:
             points = np.hstack([points, m.cell_edges])
@@ -140,6 +161,7 @@ class Discretisation:
 
     def _dirichlet(self, f: FieldSpec, boundary: str) -> DirichletDofs:
         pts = np.concatenate([self.mesh.label_points(boundary, d) for d in self.depths[f.name]])
+        pts = np.intersect1d(pts, self.support[f.name])
         base = self.offsets[f.name][pts - self.pstart]
         return DirichletDofs(f.name, boundary, base[:, None] + np.arange(f.ncomp),
                              self.mesh.point_coordinates(pts))
@@ -153,7 +175,7 @@ class Discretisation:
 
     def node_points(self, name: str) -> np.ndarray:
         """The mesh points carrying the field's nodes: vertices (+ simplex edges for P2)."""
-        return np.concatenate([np.arange(*simplex_stratum(self.dm, d)) for d in self.depths[name]])
+        return self.support[name]
 
     def field_local_dofs(self, name: str) -> np.ndarray:
         """All local dof indices of a field (vertex and edge points), (n, ncomp)."""

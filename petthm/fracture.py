@@ -30,6 +30,9 @@ from . import compat
 from .meshing import FRACTURE_TAG0
 
 FACE_SETS = "Face Sets"
+#: label (value 1) on the closure of the - faces of all cohesive cells: the
+#: support of the fracture fields; made on the serial mesh, before distribution
+MINUS_LABEL = "thm_fracture_minus"
 
 
 def _stratum(dm, name, value) -> np.ndarray:
@@ -138,7 +141,17 @@ def split_fractures(dm: PETSc.DMPlex) -> tuple[PETSc.DMPlex, list[SplitInfo]]:
     for tag in tags:
         dm, info = _split_one(dm, tag)
         infos.append(info)
+    if tags:
+        _label_minus_faces(dm)
     return dm, infos
+
+
+def _label_minus_faces(dm: PETSc.DMPlex) -> None:
+    dm.createLabel(MINUS_LABEL)
+    label = dm.getLabel(MINUS_LABEL)
+    for c in cohesive_cells(dm):
+        label.setValue(int(dm.getCone(int(c))[0]), 1)
+    dm.labelComplete(label)
 
 
 def _split_one(dm: PETSc.DMPlex, tag: int):
@@ -309,3 +322,45 @@ def main(argv=None) -> int:
 
 if __name__ == "__main__":
     raise SystemExit(main())
+
+
+class FractureSurface:
+    """The - faces of the local cohesive cells as (dim-1)-simplices embedded in
+    the mesh: the element region of the fracture fields ``pf``, ``Tf``.
+
+    Same attributes as ``mesh.Mesh`` for assembly: ``cell_vertices`` (sorted,
+    relative to vStart), ``cell_edges`` (P2 node points in ``fe.EDGES`` order),
+    the affine maps ``x0, J, detJ, Jinv`` (left inverse: tangential
+    gradients), ``h``; ``dim`` is the space dimension, ``rdim = dim - 1``.
+    """
+
+    def __init__(self, mesh):
+        from .mesh import ordered_edges, simplex_geometry
+        self.mesh = mesh
+        self.dm = mesh.dm
+        self.dim = mesh.dim
+        self.rdim = mesh.dim - 1
+        self.vstart = mesh.vstart
+        self.cells = cohesive_cells(self.dm)
+        self.faces = np.asarray([self.dm.getCone(int(c))[0] for c in self.cells], dtype=compat.INT)
+        topo = mesh._topo
+        self.cell_vertices = topo.point_vertices(self.faces, self.rdim) if len(self.faces) else \
+            np.zeros((0, self.rdim + 1), dtype=compat.INT)
+        self.cell_edges = ordered_edges(topo, self.faces, self.rdim, self.cell_vertices,
+                                        mesh.edge_vertices, mesh.estart) if len(self.faces) else \
+            np.zeros((0, len(fe_edges(self.rdim))), dtype=compat.INT)
+        self.x0, self.J, self.detJ, self.Jinv, self.h = simplex_geometry(
+            mesh.vertex_coords[self.cell_vertices], self.rdim)
+
+    @property
+    def ncells(self) -> int:
+        return len(self.faces)
+
+    def area(self) -> float:
+        from math import factorial
+        return self.dm.comm.tompi4py().allreduce(float(np.abs(self.detJ).sum()) / factorial(self.rdim))
+
+
+def fe_edges(rdim):
+    from . import fe
+    return fe.EDGES[rdim]

@@ -124,6 +124,47 @@ def _unique_rows(a: np.ndarray, k: int) -> np.ndarray:
     return out.reshape(len(a), k)
 
 
+def ordered_edges(topo, points, depth, point_vertices, edge_vertices, estart) -> np.ndarray:
+    """Edge points of simplices of ``depth`` (cells or facets) in the order of
+    ``fe.EDGES[depth]`` relative to their sorted vertices ``point_vertices``."""
+    if depth == 1:                      # a segment is its own (only) edge
+        return np.asarray(points, dtype=compat.INT)[:, None]
+    edges = topo.cones[2][points - topo.starts[2]] if depth == 2 else topo.point_edges(points, depth)
+    ev = edge_vertices[edges - estart]                                  # (n, ne, 2)
+    local = np.argmax(ev[:, :, :, None] == point_vertices[:, None, None, :], axis=3)
+    local.sort(axis=2)
+    code = local[:, :, 0] * (depth + 1) + local[:, :, 1]
+    slot = np.full((depth + 1) ** 2, -1)
+    for k, (a, b) in enumerate(fe.EDGES[depth]):
+        slot[a * (depth + 1) + b] = k
+    ordered = np.empty_like(edges)
+    np.put_along_axis(ordered, slot[code], edges, axis=1)
+    return ordered
+
+
+def simplex_geometry(X: np.ndarray, rdim: int):
+    """Affine maps x = x0 + J xi of simplices with vertex coordinates X (n, rdim+1, d).
+
+    For rdim < d (fracture faces) ``detJ`` is the measure ratio sqrt(det(J^T J))
+    and ``Jinv`` the left inverse (J^T J)^-1 J^T, which maps to tangential
+    gradients.  Returns x0, J (n, d, rdim), detJ (n,), Jinv (n, rdim, d), h (n,).
+    """
+    n, d = X.shape[0], X.shape[2]
+    x0 = X[:, 0, :]
+    J = np.ascontiguousarray(np.swapaxes(X[:, 1:, :] - X[:, :1, :], 1, 2))
+    if n == 0:
+        return x0, J, np.zeros(0), np.zeros((0, rdim, d)), np.zeros(0)
+    if rdim == d:
+        detJ, Jinv = np.linalg.det(J), np.linalg.inv(J)
+    else:
+        G = np.swapaxes(J, 1, 2) @ J
+        detJ = np.sqrt(np.linalg.det(G))
+        Jinv = np.linalg.solve(G, np.swapaxes(J, 1, 2))
+    a, b = fe.EDGES[rdim][:, 0], fe.EDGES[rdim][:, 1]
+    h = np.linalg.norm(X[:, a] - X[:, b], axis=2).max(axis=1)
+    return x0, J, detJ, Jinv, h
+
+
 @dataclass
 class Mesh:
     """A distributed simplicial DMPlex with the arrays that assembly needs.
@@ -149,6 +190,7 @@ class Mesh:
     def __post_init__(self):
         dm = self.dm
         self.dim = dim = dm.getDimension()
+        self.rdim = dim
         topo = _VertexTopology(dm)
         self._topo = topo
         self.cstart, self.cend = simplex_stratum(dm, dim)
@@ -163,30 +205,11 @@ class Mesh:
 
     # -- topology -----------------------------------------------------------
     def _ordered_cell_edges(self, topo, cells):
-        dim = self.dim
-        edges = cells[:, None] if dim == 1 else (
-            topo.cones[2][cells - topo.starts[2]] if dim == 2 else topo.point_edges(cells, dim))
-        if dim == 1:
-            return np.zeros((len(cells), 0), dtype=compat.INT)
-        ev = self.edge_vertices[edges - self.estart]                  # (nc, ne, 2)
-        local = np.argmax(ev[:, :, :, None] == self.cell_vertices[:, None, None, :], axis=3)
-        local.sort(axis=2)
-        code = local[:, :, 0] * (dim + 1) + local[:, :, 1]
-        slot = np.full((dim + 1) ** 2, -1)
-        for k, (a, b) in enumerate(fe.EDGES[dim]):
-            slot[a * (dim + 1) + b] = k
-        ordered = np.empty_like(edges)
-        np.put_along_axis(ordered, slot[code], edges, axis=1)
-        return ordered
+        return ordered_edges(topo, cells, self.dim, self.cell_vertices, self.edge_vertices, self.estart)
 
     def _geometry(self):
-        X = self.vertex_coords[self.cell_vertices]                    # (nc, d+1, d)
-        self.x0 = X[:, 0, :]
-        self.J = np.ascontiguousarray(np.swapaxes(X[:, 1:, :] - X[:, :1, :], 1, 2))
-        self.detJ = np.linalg.det(self.J) if len(X) else np.zeros(0)
-        self.Jinv = np.linalg.inv(self.J) if len(X) else np.zeros((0, self.dim, self.dim))
-        a, b = fe.EDGES[self.dim][:, 0], fe.EDGES[self.dim][:, 1]
-        self.h = np.linalg.norm(X[:, a] - X[:, b], axis=2).max(axis=1) if len(X) else np.zeros(0)
+        self.x0, self.J, self.detJ, self.Jinv, self.h = simplex_geometry(
+            self.vertex_coords[self.cell_vertices], self.dim)
 
     @property
     def ncells(self) -> int:
@@ -211,9 +234,10 @@ class Mesh:
         return self.x0[:, None, :] + np.einsum("cak,qk->cqa", self.J, x_ref)
 
     # -- boundaries ---------------------------------------------------------
-    def label_points(self, name: str, depth: int | None = None) -> np.ndarray:
-        """Local points carrying a boundary label (optionally of one depth)."""
-        lname = label_name(name)
+    def label_points(self, name: str | None, depth: int | None = None, label: str | None = None) -> np.ndarray:
+        """Local points carrying a boundary label (or the DMLabel ``label``),
+        optionally of one depth."""
+        lname = label or label_name(name)
         if not self.dm.hasLabel(lname) or self.dm.getStratumSize(lname, 1) == 0:
             return np.zeros(0, dtype=compat.INT)
         pts = np.asarray(self.dm.getStratumIS(lname, 1).getIndices(), dtype=compat.INT)

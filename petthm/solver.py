@@ -77,10 +77,10 @@ class Problem:
     """A transient FE problem: fields, model, Dirichlet data, initial state."""
 
     def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
-                 dirichlet: list[Dirichlet], quad_degree: int | None = None):
+                 dirichlet: list[Dirichlet], quad_degree: int | None = None, region=None):
         self.disc, self.model, self.dm = disc, model, disc.mesh.dm
         self.scales = scales
-        self.asm = Assembler(disc, model, scales, quad_degree)
+        self.asm = Assembler(disc, model, scales, quad_degree, region)
         self._bc = [(d, next(b for b in disc.dirichlet if b.field == d.field and b.boundary == d.boundary))
                     for d in dirichlet]
         self.X = self.dm.createGlobalVec()
