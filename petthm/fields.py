@@ -157,7 +157,7 @@ class Discretisation:
         if f.degree == 2:
             points = np.hstack([points, m.cell_edges])
         base = self.offsets[f.name][points - self.pstart]                # (nc, nb)
-        return (base[:, :, None] + np.arange(f.ncomp)).reshape(len(base), -1).astype(compat.INT)
+        return (base[:, :, None] + np.arange(f.ncomp)).reshape(len(base), base.shape[1] * f.ncomp).astype(compat.INT)
 
     def _dirichlet(self, f: FieldSpec, boundary: str) -> DirichletDofs:
         pts = np.concatenate([self.mesh.label_points(boundary, d) for d in self.depths[f.name]])

@@ -36,6 +36,27 @@ def _fracture_problem(path, dim, degree, exact, source=0.0):
     return Problem(disc, model, {"pf": FieldScale(1.0)}, bcs, region=surf), surf
 
 
+def solve_and_error(problem, exact):
+    """One linear solve (GMRES, tight tolerance); max relative nodal error over all ranks."""
+    J = problem.create_matrix()
+    problem.ijacobian(None, 0.0, problem.X, problem.X, 0.0, J, J)
+    F_ = problem.X.duplicate()
+    problem.ifunction(None, 0.0, problem.X, problem.X.duplicate(), F_)
+    ksp = PETSc.KSP().create(comm=problem.dm.comm)
+    ksp.setOperators(J)
+    ksp.setType("gmres")
+    ksp.getPC().setType("jacobi")
+    ksp.setTolerances(rtol=1e-14, atol=1e-300, max_it=5000)
+    dx = problem.X.duplicate()
+    ksp.solve(F_, dx)
+    problem.X.axpy(-1.0, dx)
+    p = problem.field_values("pf")[:, 0]
+    x = problem.disc.field_node_coordinates("pf")
+    err = np.abs(p - exact(x)).max() / np.abs(exact(x)).max() if len(p) else 0.0
+    from mpi4py import MPI
+    return problem.dm.comm.tompi4py().allreduce(err, op=MPI.MAX), p
+
+
 CASES = [("linear", d, p) for d in (2, 3) for p in (1, 2)] + [("quadratic", d, 2) for d in (2, 3)]
 
 
@@ -58,19 +79,48 @@ def test_pressure_on_a_fracture_is_exact(tmp_path, kind, dim, degree):
         exact, source = (lambda x: 1.0 + x[:, 0] ** 2), 2.0           # -lap p + 2 = 0
     problem, surf = _fracture_problem(path, dim, degree, exact, source)
     assert surf.area() == pytest.approx(area, rel=1e-12)
-    J = problem.create_matrix()
-    problem.ijacobian(None, 0.0, problem.X, problem.X, 0.0, J, J)
-    F_ = problem.X.duplicate()
-    problem.ifunction(None, 0.0, problem.X, problem.X.duplicate(), F_)
-    ksp = PETSc.KSP().create()
-    ksp.setOperators(J)
-    ksp.setType("preonly")
-    ksp.getPC().setType("lu")
-    dx = problem.X.duplicate()
-    ksp.solve(F_, dx)
-    problem.X.axpy(-1.0, dx)
-    p = problem.field_values("pf")[:, 0]
-    x = problem.disc.field_node_coordinates("pf")
-    err = np.abs(p - exact(x)).max() / np.abs(exact(x)).max()
+    err, p = solve_and_error(problem, exact)
     print(f"{kind} {dim}D P{degree}: fracture nodes {len(p)}, max relative error {err:.1e}")
     assert len(p) > 0 and err <= 1e-10
+
+
+PARALLEL_SCRIPT = """
+import sys, petsc4py; petsc4py.init()
+sys.path.insert(0, {tests!r})
+import numpy as np
+from test_fracture_fields import _fracture_problem, solve_and_error
+problem, surf = _fracture_problem({path!r}, {dim}, 2, lambda x: 1.0 + x[:, 0] ** 2, 2.0)
+err, _ = solve_and_error(problem, lambda x: 1.0 + x[:, 0] ** 2)
+sizes = problem.disc.global_sizes()
+area = surf.area()
+if problem.dm.comm.rank == 0:
+    print(err, sizes["pf"], area)
+"""
+
+
+@pytest.mark.parallel
+@pytest.mark.parametrize("dim", [2, 3])
+def test_fracture_field_in_parallel(tmp_path, dim):
+    """2 and 3 ranks: same number of fracture unknowns, same area, still exact."""
+    import os
+    import subprocess
+    import sys
+    from conftest import MPI_ENV, ROOT
+    fr = [M.Fracture("segment", p0=(0.0, 0.5), p1=(1.0, 0.5))] if dim == 2 else \
+        [M.Fracture("rectangle", center=(0.5, 0.5, 0.5), half=(0.5, 0.3))]
+    path = M.box_with_fractures(str(tmp_path / "m.msh"), [1] * dim, 0.25 if dim == 3 else 0.1, fr)
+    script = tmp_path / "run.py"
+    script.write_text(PARALLEL_SCRIPT.format(tests=os.path.join(ROOT, "tests"), path=path, dim=dim))
+    out = {}
+    for n in (1, 2, 3):
+        cmd = [sys.executable, str(script)]
+        cmd = cmd if n == 1 else ["mpiexec", "-n", str(n)] + cmd
+        p = subprocess.run(cmd, cwd=ROOT,
+                           env=dict(os.environ, **MPI_ENV), capture_output=True, text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        err, ndof, area = p.stdout.split()
+        out[n] = (float(err), int(ndof), float(area))
+    print(out)
+    for n in (2, 3):
+        assert out[n][0] <= 1e-10 and out[n][1] == out[1][1]
+        assert out[n][2] == pytest.approx(out[1][2], rel=1e-12)
