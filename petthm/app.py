@@ -91,8 +91,16 @@ class Run:
             self.mpi.barrier()
         dm = read_plex(path, self.comm)
         label_boundaries(dm, scene.boundaries())
+        if scene.fractured:
+            from .fracture import split_fractures
+            dm, self.split_info = split_fractures(dm)
+            if not self.split_info:
+                raise InputError(f"mesh '{path}' has no fracture (physical group 10, 11, ... of facets)")
         dm = distribute(dm)
         mesh = Mesh(dm)
+        if scene.fractured:
+            from .fracture import FractureSurface
+            mesh.fracture = FractureSurface(mesh)
         self._pop("mesh", st, t0)
         return mesh
 
@@ -103,16 +111,18 @@ class Run:
         bcs = {}
         for d in dirichlet:
             bcs.setdefault(d.field, []).append(d.boundary)
-        disc = Discretisation(mesh, model.fields, bcs)
+        regions = {"fracture": mesh.fracture} if scene.fractured else {}
+        disc = Discretisation(mesh, model.fields, bcs, regions=regions, ties=model.ties)
         problem = Problem(disc, model, scales, dirichlet, run.quadrature_degree or None)
         problem.set_initial(initial)
         td = scene.time
         control = StepControl(final_time=run.final_time or td.final_time,
                               dt_initial=run.dt_initial or td.dt_initial,
                               growth=run.dt_growth or td.dt_growth,
-                              dt_max=run.dt_max or td.dt_max)
+                              dt_max=run.dt_max or td.dt_max,
+                              hit_times=tuple(scene.hit_times()))
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
-        propose_defaults(SOLVER_DEFAULTS)
+        propose_defaults(dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm)))
         self._pop("setup", st, t0)
         return disc, problem, control, rs
 
@@ -130,7 +140,8 @@ class Run:
             f"residual / {rscales[k]:.3e}" for k in sizes))
 
         st, t0 = self._stage("output")
-        writer = FieldWriter(disc, self.outdir, disc.fields[0].degree)
+        matrix_fields = [f for f in disc.fields if f.region == "matrix"]
+        writer = FieldWriter(disc, self.outdir, matrix_fields[0].degree) if matrix_fields else None
         columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(scene.history_columns)
         history = History(os.path.join(self.outdir, "history.csv"), columns, comm.rank)
         self._pop("output", st, t0)
@@ -139,8 +150,10 @@ class Run:
         state = {"its": (0, 0), "wall": time.perf_counter(), "last_t": 0.0}
 
         def write_fields(t):
+            if writer is None:
+                return
             s, t1 = self._stage("output")
-            writer.write(t - 0.0, {f.name: self._si_out(problem, f.name, t) for f in disc.fields})
+            writer.write(t - 0.0, {f.name: self._si_out(problem, f.name, t) for f in matrix_fields})
             self._pop("output", s, t1)
 
         def monitor(step, t, X):
@@ -151,7 +164,7 @@ class Run:
             state["last_t"] = t
             wall = time.perf_counter() - self.t_start
             row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk, "wall": wall}
-            row.update(scene.monitors(problem, t))
+            row.update(scene.monitors(problem, t, X))
             history.write(row)
             if step == 1:
                 check_unused_petsc_options()

@@ -115,9 +115,9 @@ class CellContext:
         if key not in self._cache:
             a = self._asm
             f = a.disc.field(name)
-            sc = a.scales[name]
+            sc = a.scale(name)
             src = self._xdl if dot else self._xl
-            v = src[a.disc.elem_dofs[name][self._cells]] * sc.scale
+            v = src[a.dofs(name)[self._cells]] * sc.scale
             if not dot:
                 v = v + sc.offset
             self._cache[key] = v.reshape(v.shape[0], -1, f.ncomp)
@@ -202,12 +202,19 @@ class Assembler:
     """Residual and Jacobian of a ``Model`` on a ``Discretisation``."""
 
     def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
-                 quad_degree: int | None = None, region=None):
-        """``region``: the elements integrated over, with their affine maps
-        (default: the mesh's cells; or a ``fracture.FractureSurface``)."""
-        self.disc, self.model = disc, model
-        self.mesh = region if region is not None else disc.mesh
+                 quad_degree: int | None = None, region: str = "matrix", inv_rscale=None):
+        """``region``: the name of the elements integrated over ("matrix": the
+        mesh's cells; "fracture": ``disc.regions["fracture"]``, a
+        ``fracture.FractureSurface``); only the model's terms on that region
+        are assembled.  ``inv_rscale``: per local dof, 1/(residual scale of
+        the row it is added to) (default: from ``scales``)."""
+        self.disc, self.region = disc, region
+        self.model = Model(model.fields, [t for t in model.residuals if t.region == region],
+                           [t for t in model.jacobians if t.region == region],
+                           model.facets if region == "matrix" else [])
+        self.mesh = disc.regions[region]
         self.scales = scales
+        self.inv_rscale = inv_rscale if inv_rscale is not None else self.default_inv_rscale(disc, scales)
         dim = self.mesh.rdim
         pmax = max(f.degree for f in disc.fields)
         self.rule = fe.rule(dim, quad_degree or 2 * pmax)
@@ -216,6 +223,23 @@ class Assembler:
         self._ref_cache = {}
         self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in model.facets}
         self._build_pattern()
+
+    @staticmethod
+    def default_inv_rscale(disc, scales) -> np.ndarray:
+        """1/rscale of each local dof's field (ties: of the target field)."""
+        inv = np.ones(disc.nlocal)
+        for f in disc.fields:
+            inv[disc.field_local_dofs(f.name).ravel()] = 1.0 / scales[f.name].rscale
+        for t in disc.ties:
+            inv[t.dofs] = 1.0 / scales[t.target].rscale
+        return inv
+
+    def dofs(self, name) -> np.ndarray:
+        """Element dofs of a field (or trace, "Tm+") on this region's elements."""
+        return self.disc.region_dofs(self.region, name)
+
+    def scale(self, name) -> FieldScale:
+        return self.scales[self.disc.field(name).name]
 
     # -- tabulations ----------------------------------------------------------
     def tab(self, name) -> _Tab:
@@ -246,8 +270,8 @@ class Assembler:
     # -- COO pattern ----------------------------------------------------------
     def _block_index(self, test, trial, cells):
         g = self.disc.global_index
-        rows = g[self.disc.elem_dofs[test][cells]]
-        cols = g[self.disc.elem_dofs[trial][cells]]
+        rows = g[self.dofs(test)[cells]]
+        cols = g[self.dofs(trial)[cells]]
         R = np.broadcast_to(rows[:, :, None], (len(rows), rows.shape[1], cols.shape[1]))
         C = np.broadcast_to(cols[:, None, :], R.shape)
         return R.ravel(), C.ravel()
@@ -311,8 +335,8 @@ class Assembler:
         return out
 
     def _scatter(self, out, name, cells, r):
-        idx = self.disc.elem_dofs[name][cells].ravel()
-        out += np.bincount(idx, weights=np.ravel(r) / self.scales[name].rscale, minlength=out.size)
+        idx = self.dofs(name)[cells].ravel()
+        out += np.bincount(idx, weights=np.ravel(r) * self.inv_rscale[idx], minlength=out.size)
 
     # -- Jacobian -------------------------------------------------------------
     def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
@@ -320,21 +344,24 @@ class Assembler:
         out = np.empty(self._keep.size)
         pos = 0
         for jb in self.model.jacobians:
-            factor = self.scales[jb.trial].scale / self.scales[jb.test].rscale
             for cells in self._chunks():
                 ctx = CellContext(self, cells, xl, xdl, t, shift)
-                K = self._cell_block(jb, ctx, cells).ravel()
-                np.multiply(K, factor, out=out[pos:pos + K.size])
+                K = self._cell_block(jb, ctx, cells)
+                rowfac = self.inv_rscale[self.dofs(jb.test)[cells]] * self.scale(jb.trial).scale
+                K = (K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel()
+                out[pos:pos + K.size] = K
                 pos += K.size
         for ft in self.model.facets:
             if ft.g0 is None:
                 continue
-            sc = self.scales[ft.field]
+            sc = self.scale(ft.field)
             for fb in self._facets[ft.boundary]:
                 ctx = FacetContext(self, fb, xl, xdl, t, shift)
                 phi = fb.tabs[self.disc.field(ft.field).degree].phi
-                K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi).ravel()
-                np.multiply(K, sc.scale / sc.rscale, out=out[pos:pos + K.size])
+                K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi)
+                rowfac = self.inv_rscale[self.dofs(ft.field)[fb.cells]] * sc.scale
+                K = (K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel()
+                out[pos:pos + K.size] = K
                 pos += K.size
         return out if self._all_kept else out[self._keep]
 
@@ -422,16 +449,24 @@ class Assembler:
         return K if m == 1 and n == 1 else K.transpose(0, 3, 1, 4, 2)      # (nc, nbF, m, nbG, n)
 
     # -- functionals ------------------------------------------------------------
+    def integrate(self, xl, integrand: Callable, t: float = 0.0) -> float:
+        """Global integral over this region of ``integrand(ctx)`` (nc, nq), SI."""
+        acc = 0.0
+        for cells in self._chunks():
+            ctx = CellContext(self, cells, xl, xl, t)
+            acc += float(np.sum(self.W[cells] * np.broadcast_to(integrand(ctx), self.W[cells].shape)))
+        return self.mesh.dm.comm.tompi4py().allreduce(acc)
+
     def error_norms(self, xl, name: str, exact: Callable, exact_grad: Callable, t: float,
                     degree: int = 6) -> dict[str, float]:
         """Global L2 and H1-seminorm errors and norms of the exact field (SI)."""
         m, f = self.mesh, self.disc.field(name)
         rule = fe.rule(m.rdim, max(degree, 2 * f.degree + 2))
         tab = _Tab(m.rdim, f.degree, rule.points)
-        sc = self.scales[name]
+        sc = self.scale(name)
         acc = np.zeros(4)
         for cells in self._chunks():
-            X = xl[self.disc.elem_dofs[name][cells]].reshape(-1, tab.phi.shape[1], f.ncomp) * sc.scale + sc.offset
+            X = xl[self.dofs(name)[cells]].reshape(-1, tab.phi.shape[1], f.ncomp) * sc.scale + sc.offset
             x = m.x0[cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[cells], rule.points)
             W = np.abs(m.detJ[cells])[:, None] * rule.weights
             u = tab.phi @ X

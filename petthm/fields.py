@@ -36,6 +36,19 @@ class DirichletDofs:
     boundary: str
     dofs: np.ndarray        # (n, ncomp) local dof indices
     coords: np.ndarray      # (n, dim)
+    source: str = ""        # tied dofs: the fracture field whose Dirichlet data they take
+
+
+@dataclass
+class Tie:
+    """Matrix-field dofs on the fracture faces that are the fracture field's
+    unknowns (pressure or temperature continuity imposed strongly, see
+    docs/fracture.md): local dofs of ``field`` and the global index of
+    ``target``'s dof at the same node."""
+    field: str
+    target: str
+    dofs: np.ndarray         # (n,) local dof indices of field (constrained in the section)
+    target_global: np.ndarray  # (n,) global indices of target's unknowns
 
 
 class Discretisation:
@@ -43,8 +56,12 @@ class Discretisation:
 
     def __init__(self, mesh: Mesh, fields: Sequence[FieldSpec],
                  dirichlet: dict[str, Sequence[str]] | None = None, dm: PETSc.DM | None = None,
-                 regions: dict | None = None):
+                 regions: dict | None = None, ties: dict[str, str] | None = None):
+        """``ties``: {matrix field: fracture field}, e.g. {"pm": "pf"}: the
+        matrix field's nodes on both fracture faces are the fracture field's
+        nodes (strong continuity across the wall)."""
         self.mesh = mesh
+        self.ties_spec = dict(ties or {})
         self.dm = dm or mesh.dm
         self.fields = list(fields)
         self.index = {f.name: i for i, f in enumerate(self.fields)}
@@ -54,6 +71,9 @@ class Discretisation:
         self.depths = {f.name: (0, 1) if f.degree == 2 else (0,) for f in self.fields}
         self.support = {f.name: self._support_points(f) for f in self.fields}
         bc_points = {f.name: self._bc_points(dirichlet.get(f.name, ()), f) for f in self.fields}
+        self.tied_points = {f: self._tied_points(f) for f in self.ties_spec}
+        for f, pts in self.tied_points.items():
+            bc_points[f] = np.union1d(bc_points[f], pts).astype(compat.INT)
         self.section = self._create_section(bc_points)
         compat.set_local_section(dm, self.section)
         self.nlocal = self.section.getStorageSize()
@@ -63,6 +83,56 @@ class Discretisation:
         self.global_index = compat.lgmap_indices(dm)
         if self.global_index.size != self.nlocal:
             raise RuntimeError("local-to-global map does not match the local section")
+        self._trace_cache = {}
+        self.ties = []
+        for f, g in self.ties_spec.items():
+            self._tie(f, g, dirichlet.get(g, ()))
+
+    # -- ties (strong continuity of a matrix field with a fracture field) --------
+    def _tied_points(self, f: str) -> np.ndarray:
+        from .fracture import MINUS_LABEL, PLUS_LABEL
+        g = self.ties_spec[f]
+        if self.field(f).region != "matrix" or self.field(g).region != "fracture" or \
+                self.field(f).degree != self.field(g).degree or self.field(f).ncomp != 1:
+            raise ValueError(f"cannot tie {f} to {g}: need a scalar matrix field and a "
+                             "fracture field of the same degree")
+        on = np.union1d(self.mesh.label_points(None, label=MINUS_LABEL),
+                        self.mesh.label_points(None, label=PLUS_LABEL))
+        return np.intersect1d(self.support[f], on).astype(compat.INT)
+
+    def _tie(self, f: str, g: str, g_boundaries) -> None:
+        """Find, for every tied node of ``f``, the global unknown of ``g`` at the
+        same coordinates (the - copy of the node; on any rank), or the Dirichlet
+        boundary of ``g`` that constrains it."""
+        from scipy.spatial import cKDTree
+        pts = self.tied_points[f]
+        coords = self.mesh.point_coordinates(pts)
+        dofs = self.offsets[f][pts - self.pstart]
+        constrained = np.zeros(len(pts), dtype=bool)
+        for b in g_boundaries:
+            on_b = np.isin(pts, self.mesh.label_points(b))
+            if on_b.any():
+                self.dirichlet.append(DirichletDofs(f, b, dofs[on_b][:, None], coords[on_b], source=g))
+            constrained |= on_b
+        gp = self.support[g]
+        gg = self.global_index[self.offsets[g][gp - self.pstart]]
+        lo, hi = self.ownership_range()
+        own = (gg >= lo) & (gg < hi)
+        comm = self.mesh.dm.comm.tompi4py()
+        allc = np.concatenate(comm.allgather(self.mesh.point_coordinates(gp[own])) or [np.zeros((0, self.mesh.dim))])
+        allg = np.concatenate(comm.allgather(gg[own]))
+        free = ~constrained
+        target = np.full(len(pts), -1, dtype=compat.INT)
+        if free.any():
+            if not len(allc):
+                raise RuntimeError(f"no {g} unknowns to tie {f} to")
+            dist, idx = cKDTree(allc).query(coords[free])
+            h = float(self.mesh.h.max()) if self.mesh.ncells else 1.0
+            if dist.max() > 1e-8 * h:
+                raise RuntimeError(f"a tied {f} node has no {g} node at its position")
+            target[free] = allg[idx]
+        self.ties.append(Tie(f, g, dofs[free], target[free]))
+        self.global_index[dofs[free]] = target[free]
 
     # -- section --------------------------------------------------------------
     def _support_points(self, f: FieldSpec) -> np.ndarray:
@@ -166,8 +236,33 @@ class Discretisation:
         return DirichletDofs(f.name, boundary, base[:, None] + np.arange(f.ncomp),
                              self.mesh.point_coordinates(pts))
 
+    # -- element dofs per region (traces of matrix fields on the fracture) ------
+    def region_dofs(self, region: str, name: str) -> np.ndarray:
+        """Element dofs of ``name`` on a region's elements: the field's own
+        elements, or on the fracture the trace of a matrix field on the - face
+        ("Tm-") or on the paired + face ("Tm+"), nodes in the - face's order."""
+        if region == self.field(name).region and name in self.index:
+            return self.elem_dofs[name]
+        key = (region, name)
+        if key not in self._trace_cache:
+            base, side = name[:-1], name[-1]
+            surf = self.regions[region]
+            f = self.field(base)
+            verts, edges = (surf.cell_vertices, surf.cell_edges) if side == "-" else \
+                (surf.plus_vertices, surf.plus_edges)
+            points = verts + surf.vstart
+            if f.degree == 2:
+                points = np.hstack([points, edges])
+            base_off = self.offsets[base][points - self.pstart]
+            self._trace_cache[key] = (base_off[:, :, None] + np.arange(f.ncomp)).reshape(
+                len(base_off), -1).astype(compat.INT)
+        return self._trace_cache[key]
+
     # -- helpers ----------------------------------------------------------------
     def field(self, name: str) -> FieldSpec:
+        """The FieldSpec of a field, or of the matrix field of a trace name ("Tm+")."""
+        if name not in self.index and name[-1:] in "+-":
+            name = name[:-1]
         return self.fields[self.index[name]]
 
     def nodes_per_cell(self, name: str) -> int:
@@ -188,8 +283,9 @@ class Discretisation:
     def global_sizes(self) -> dict[str, int]:
         """Number of unknowns per field (global, constrained dofs excluded)."""
         out = {}
+        tied = np.concatenate([t.dofs for t in self.ties]) if self.ties else np.zeros(0, dtype=int)
         for i, f in enumerate(self.fields):
-            dofs = self.field_local_dofs(f.name).ravel()
+            dofs = np.setdiff1d(self.field_local_dofs(f.name).ravel(), tied)
             g = self.global_index[dofs]
             out[f.name] = self.mesh.dm.comm.tompi4py().allreduce(int(self._owned(g).sum()))
         return out

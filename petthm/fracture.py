@@ -33,6 +33,8 @@ FACE_SETS = "Face Sets"
 #: label (value 1) on the closure of the - faces of all cohesive cells: the
 #: support of the fracture fields; made on the serial mesh, before distribution
 MINUS_LABEL = "thm_fracture_minus"
+#: label (value 1) on the closure of the + faces (tip points included)
+PLUS_LABEL = "thm_fracture_plus"
 
 
 def _stratum(dm, name, value) -> np.ndarray:
@@ -146,12 +148,24 @@ def split_fractures(dm: PETSc.DMPlex) -> tuple[PETSc.DMPlex, list[SplitInfo]]:
     return dm, infos
 
 
+#: boundary-condition names (``mesh.label_name``) of all fracture points and of the tips
+FRACTURE_BC, TIP_BC = "fracture", "fracture_tip"
+
+
 def _label_minus_faces(dm: PETSc.DMPlex) -> None:
-    dm.createLabel(MINUS_LABEL)
-    label = dm.getLabel(MINUS_LABEL)
-    for c in cohesive_cells(dm):
-        label.setValue(int(dm.getCone(int(c))[0]), 1)
-    dm.labelComplete(label)
+    """Labels on the closures of the - faces and of the + faces (serial mesh)."""
+    for name, side in ((MINUS_LABEL, 0), (PLUS_LABEL, 1)):
+        dm.createLabel(name)
+        label = dm.getLabel(name)
+        for c in cohesive_cells(dm):
+            label.setValue(int(dm.getCone(int(c))[side]), 1)
+        dm.labelComplete(label)
+    from .mesh import label_name
+    dm.createLabel(label_name(FRACTURE_BC))
+    both = dm.getLabel(label_name(FRACTURE_BC))
+    for name in (MINUS_LABEL, PLUS_LABEL):
+        for p in _stratum(dm, name, 1):
+            both.setValue(int(p), 1)
 
 
 def _split_one(dm: PETSc.DMPlex, tag: int):
@@ -179,6 +193,11 @@ def _split_one(dm: PETSc.DMPlex, tag: int):
     votes = dm.comm.tompi4py().allreduce(_side_votes(dm, coh, normal))
     if votes > 0:
         _flip_sides(coh, dim)
+    from .mesh import label_name
+    dm.createLabel(label_name(TIP_BC))                  # carried over by the split
+    tips = dm.getLabel(label_name(TIP_BC))
+    for p in _stratum_label(tip, 1):
+        tips.setValue(int(p), 1)
     split = compat.construct_cohesive_cells(dm, coh)
     info = SplitInfo(tag, len(facets), tip.getStratumSize(1), normal)
     tip.destroy()
@@ -351,6 +370,44 @@ class FractureSurface:
             np.zeros((0, len(fe_edges(self.rdim))), dtype=compat.INT)
         self.x0, self.J, self.detJ, self.Jinv, self.h = simplex_geometry(
             mesh.vertex_coords[self.cell_vertices], self.rdim)
+        self.plus_faces = np.asarray([self.dm.getCone(int(c))[1] for c in self.cells], dtype=compat.INT)
+        self.plus_vertices = self._paired_plus_vertices(topo)
+        self.plus_edges = ordered_edges(topo, self.plus_faces, self.rdim, self.plus_vertices,
+                                        mesh.edge_vertices, mesh.estart) if len(self.faces) else \
+            np.zeros_like(self.cell_edges)
+        self.normals = self._unit_normals()
+
+    def _paired_plus_vertices(self, topo) -> np.ndarray:
+        """Vertices of each + face in the order of the - face's vertices (paired
+        by coordinates: the copies coincide; a tip vertex is its own pair)."""
+        if not len(self.faces):
+            return np.zeros_like(self.cell_vertices)
+        pv = topo.point_vertices(self.plus_faces, self.rdim)
+        X = self.mesh.vertex_coords
+        d = np.linalg.norm(X[self.cell_vertices][:, :, None, :] - X[pv][:, None, :, :], axis=3)
+        match = np.argmin(d, axis=2)
+        if np.take_along_axis(d, match[:, :, None], axis=2).max() > 1e-9 * max(self.h.max(), 1e-300):
+            raise RuntimeError("+ and - fracture faces do not coincide")
+        return np.take_along_axis(pv, match, axis=1)
+
+    def _unit_normals(self) -> np.ndarray:
+        """Unit normal n of each - face, from the - side to the + side: the
+        split's convention, first non-zero component among (z, y, x) positive
+        (planar fractures; see ``split_fractures``)."""
+        if not self.ncells:
+            return np.zeros((0, self.dim))
+        if self.dim == 2:
+            t = self.J[:, :, 0]
+            n = np.stack([-t[:, 1], t[:, 0]], axis=1)
+        else:
+            n = np.cross(self.J[:, :, 0], self.J[:, :, 1])
+        n /= np.linalg.norm(n, axis=1, keepdims=True)
+        lead = np.zeros(len(n))
+        for k in range(self.dim):               # x, then y, then (3D) z override
+            big = np.abs(n[:, k]) > 1e-8
+            lead[big] = n[big, k]
+        n[lead < 0] *= -1
+        return n
 
     @property
     def ncells(self) -> int:

@@ -142,26 +142,33 @@ def _add_fracture(gmsh, f: Fracture):
 
 
 def box_with_fractures(path: str, lengths: Sequence[float], size: float,
-                       fractures: Sequence[Fracture], grading_distance: float = 0.0) -> str:
-    """Box (or rectangle) with embedded fractures; the mesh conforms to them.
+                       fractures: Sequence[Fracture], grading_distance: float = 0.0,
+                       origin: Sequence[float] = (), wells: Sequence[tuple] = (),
+                       well_size: float = 0.0) -> str:
+    """Box (or rectangle) ``origin + [0, lengths]`` with embedded fractures; the
+    mesh conforms to them.
 
     Physical groups: the domain (cells, tag 1) and fracture ``i`` (facets, tag
     ``FRACTURE_TAG0 + i``).  With ``grading_distance`` > 0 the size grows
     linearly from each fracture's ``size`` to ``size`` over that distance.
+    ``wells``: points (on a fracture) that become mesh vertices, with mesh
+    size ``well_size`` (default: the fracture's) growing away from them.
     """
     dim = len(lengths)
+    o = tuple(origin) or (0.0,) * dim
     gmsh = _start("fractured_box")
     occ = gmsh.model.occ
-    dom = occ.addRectangle(0, 0, 0, *lengths) if dim == 2 else occ.addBox(0, 0, 0, *lengths)
+    dom = occ.addRectangle(*o[:2], 0, *lengths) if dim == 2 else occ.addBox(*o, *lengths)
     tools = [_add_fracture(gmsh, f) for f in fractures]
-    _, mapping = occ.fragment([(dim, dom)], tools)
+    wpts = [(0, occ.addPoint(*(tuple(w) + (0.0,) * (3 - len(w))))) for w in wells]
+    _, mapping = occ.fragment([(dim, dom)], tools + wpts)
     occ.synchronize()
     cells = [t for (d, t) in mapping[0] if d == dim]
     gmsh.model.addPhysicalGroup(dim, cells, 1)
-    for i, m in enumerate(mapping[1:]):
+    for i, m in enumerate(mapping[1:1 + len(fractures)]):
         ents = [t for (d, t) in m if d == dim - 1]
         gmsh.model.addPhysicalGroup(dim - 1, ents, FRACTURE_TAG0 + i)
-    fine = [f.size or size for f in fractures]
+    fine = [f.size or size for f in fractures] + ([well_size] if wells and well_size else [])
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     gmsh.option.setNumber("Mesh.MeshSizeMin", min(fine))
     if grading_distance > 0:
@@ -169,22 +176,31 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
         fields = []
         for f, m in zip(fractures, mapping[1:]):
             ents = [t for (d, t) in m if d == dim - 1]
-            dist = mf.add("Distance")
-            mf.setNumbers(dist, "CurvesList" if dim == 2 else "SurfacesList", ents)
-            mf.setNumber(dist, "Sampling", 100)
-            thr = mf.add("Threshold")
-            mf.setNumber(thr, "InField", dist)
-            mf.setNumber(thr, "SizeMin", f.size or size)
-            mf.setNumber(thr, "SizeMax", size)
-            mf.setNumber(thr, "DistMin", 0.0)
-            mf.setNumber(thr, "DistMax", grading_distance)
-            fields.append(thr)
+            fields.append(_threshold(mf, "CurvesList" if dim == 2 else "SurfacesList", ents,
+                                     f.size or size, size, grading_distance))
+        if wells and well_size:
+            ents = [t for m in mapping[1 + len(fractures):] for (d, t) in m if d == 0]
+            fields.append(_threshold(mf, "PointsList", ents, well_size, size, grading_distance))
         mn = mf.add("Min")
         mf.setNumbers(mn, "FieldsList", fields)
         mf.setAsBackgroundMesh(mn)
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     return _write(gmsh, dim, path)
+
+
+def _threshold(mf, kind: str, ents, size_min: float, size_max: float, distance: float) -> int:
+    """A size field growing linearly from ``size_min`` on the entities to ``size_max``."""
+    dist = mf.add("Distance")
+    mf.setNumbers(dist, kind, ents)
+    mf.setNumber(dist, "Sampling", 100)
+    thr = mf.add("Threshold")
+    mf.setNumber(thr, "InField", dist)
+    mf.setNumber(thr, "SizeMin", size_min)
+    mf.setNumber(thr, "SizeMax", size_max)
+    mf.setNumber(thr, "DistMin", 0.0)
+    mf.setNumber(thr, "DistMax", distance)
+    return thr
 
 
 def _write(gmsh, dim: int, path: str) -> str:

@@ -25,6 +25,7 @@ class CellResidual:
     field: str
     f0: Optional[Kernel] = None
     f1: Optional[Kernel] = None
+    region: str = "matrix"
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,7 @@ class CellJacobian:
     g2: Optional[Kernel] = None
     g3: Optional[Kernel] = None
     g2_lap: Optional[Kernel] = None
+    region: str = "matrix"
 
 
 @dataclass(frozen=True)
@@ -48,9 +50,32 @@ class FacetTerm:
     g0: Optional[Kernel] = None
 
 
+@dataclass(frozen=True)
+class PointTerm:
+    """Residual terms at one node (a well, physics.md section 9).
+
+    ``residual(values, t)`` receives the SI values of ``fields`` at the node
+    and returns {field: contribution}; ``jacobian(values, t)`` returns
+    {(test, trial): derivative} (SI).  ``point`` is the node's position (a
+    mesh vertex)."""
+    name: str
+    point: tuple
+    fields: tuple
+    residual: Kernel
+    jacobian: Kernel
+
+
 @dataclass
 class Model:
+    """The active fields and every term, each on its region ("matrix": the
+    cells; "fracture": the - faces of the cohesive cells, where the names
+    "Tm-"/"Tm+" denote the traces of a matrix field on the two faces)."""
     fields: list[FieldSpec]
     residuals: list[CellResidual] = field(default_factory=list)
     jacobians: list[CellJacobian] = field(default_factory=list)
     facets: list[FacetTerm] = field(default_factory=list)
+    points: list[PointTerm] = field(default_factory=list)
+    ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
+
+    def regions(self) -> list[str]:
+        return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

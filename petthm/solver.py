@@ -44,6 +44,18 @@ SOLVER_DEFAULTS = {
 }
 
 
+def direct_solver_defaults(comm) -> dict[str, str]:
+    """A sparse direct solve: MUMPS, else SuperLU_dist, else PETSc's LU
+    (serial) or, in parallel, PETSc's LU on a redundant copy of the matrix."""
+    out = {"ksp_type": "gmres", "ksp_max_it": "50"}
+    for package in ("mumps", "superlu_dist"):
+        if PETSc.Sys.hasExternalPackage(package):
+            return dict(out, pc_type="lu", pc_factor_mat_solver_type=package)
+    if comm.size == 1:
+        return dict(out, pc_type="lu")
+    return dict(out, pc_type="redundant", redundant_pc_type="lu")
+
+
 #: option names petthm inserted itself (never reported as unused)
 PROPOSED: set[str] = set()
 
@@ -71,39 +83,83 @@ class StepControl:
     dt_initial: float
     growth: float = 1.0
     dt_max: float = math.inf
+    hit_times: tuple = ()        # times to land on exactly
 
 
 class Problem:
-    """A transient FE problem: fields, model, Dirichlet data, initial state."""
+    """A transient FE problem: fields, model (terms on the matrix cells, the
+    fracture faces and at well nodes), Dirichlet data, ties, initial state."""
 
     def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
-                 dirichlet: list[Dirichlet], quad_degree: int | None = None, region=None):
+                 dirichlet: list[Dirichlet], quad_degree: int | None = None):
         self.disc, self.model, self.dm = disc, model, disc.mesh.dm
         self.scales = scales
-        self.asm = Assembler(disc, model, scales, quad_degree, region)
-        self._bc = [(d, next(b for b in disc.dirichlet if b.field == d.field and b.boundary == d.boundary))
-                    for d in dirichlet]
+        for t in disc.ties:
+            a, b = scales[t.field], scales[t.target]
+            if (a.scale, a.offset) != (b.scale, b.offset):
+                raise ValueError(f"tied fields {t.field} and {t.target} need the same unknown scaling")
+        self.inv_rscale = Assembler.default_inv_rscale(disc, scales)
+        self.assemblers = [Assembler(disc, model, scales, quad_degree, region=r, inv_rscale=self.inv_rscale)
+                           for r in model.regions()]
+        self.asm = self.assemblers[0]
+        self.points = [_PointDofs(disc, pt) for pt in model.points]
+        self._dirichlet = list(dirichlet)
+        byname = {(d.field, d.boundary): d for d in dirichlet}
+        self._bc = []
+        for dd in disc.dirichlet:
+            d = byname.get((dd.source or dd.field, dd.boundary))
+            if d is not None:
+                self._bc.append((d, dd))
         self.X = self.dm.createGlobalVec()
         self.X.setName("solution")
         self._Xl = self.dm.createLocalVec()
         self._Xdl = self.dm.createLocalVec()
         self._Fl = self.dm.createLocalVec()
+        self._tie_setup()
         self.J = None
         self._ev_res = PETSc.Log.Event("thm.residual")
         self._ev_jac = PETSc.Log.Event("thm.jacobian")
 
+    # -- ties: matrix dofs on the fracture walls that are fracture unknowns --------
+    def _tie_setup(self):
+        ties = self.disc.ties
+        self._tie_dofs = np.concatenate([t.dofs for t in ties]).astype(compat.INT) if ties else \
+            np.zeros(0, dtype=compat.INT)
+        target = np.concatenate([t.target_global for t in ties]).astype(compat.INT) if ties else \
+            np.zeros(0, dtype=compat.INT)
+        self._tie_vec = PETSc.Vec().createSeq(len(target), comm=PETSc.COMM_SELF)
+        src = PETSc.IS().createGeneral(target, comm=PETSc.COMM_SELF)
+        self._tie_scatter = PETSc.Scatter().create(self.X, src, self._tie_vec, None)
+
+    def _tie_values(self, X, xl):
+        if not self.disc.ties:
+            return
+        self._tie_scatter.scatter(X, self._tie_vec, PETSc.InsertMode.INSERT_VALUES,
+                                  PETSc.ScatterMode.FORWARD)
+        xl[self._tie_dofs] = self._tie_vec.getArray()
+
+    def _tie_add(self, rl, F):
+        """Add the residual rows of tied dofs into their targets' rows of F."""
+        if not self.disc.ties:
+            return
+        self._tie_vec.getArray()[:] = rl[self._tie_dofs]
+        self._tie_scatter.scatter(self._tie_vec, F, PETSc.InsertMode.ADD_VALUES,
+                                  PETSc.ScatterMode.REVERSE)
+
     # -- local vectors with Dirichlet values ------------------------------------
     def local_arrays(self, X: PETSc.Vec, t: float, Xdot: PETSc.Vec | None = None):
-        """Local (scaled) solution and rate arrays with Dirichlet values inserted."""
+        """Local (scaled) solution and rate arrays with Dirichlet and tied values inserted."""
         self.dm.globalToLocal(X, self._Xl, addv=PETSc.InsertMode.INSERT_VALUES)
         xl = self._Xl.getArray()
         xdl = self._Xdl.getArray()
+        self._tie_values(X, xl)
         if Xdot is not None:
             self.dm.globalToLocal(Xdot, self._Xdl, addv=PETSc.InsertMode.INSERT_VALUES)
+            self._tie_values(Xdot, xdl)
         else:
             xdl[:] = 0.0
         for d, dofs in self._bc:
-            sc = self.scales[d.field]
+            sc = self.scales[dofs.field]
             if dofs.dofs.size == 0:
                 continue
             shape = dofs.dofs.shape
@@ -131,19 +187,73 @@ class Problem:
         sc = self.scales[name]
         return xl[self.disc.field_local_dofs(name)] * sc.scale + sc.offset
 
-    # -- callbacks ---------------------------------------------------------------
+    def point_value(self, name: str, point, X: PETSc.Vec | None = None, t: float = 0.0) -> float:
+        """SI value of a scalar field at the node nearest to ``point`` (all ranks)."""
+        from mpi4py import MPI
+        v = self.field_values(name, X, t)[:, 0]
+        x = self.disc.field_node_coordinates(name)
+        d = np.linalg.norm(x - np.asarray(point)[None, :x.shape[1]], axis=1) if len(v) else np.zeros(0)
+        k = int(np.argmin(d)) if len(d) else 0
+        best = (float(d[k]), float(v[k])) if len(d) else (np.inf, 0.0)
+        return self.dm.comm.tompi4py().allreduce(best, op=MPI.MINLOC)[1]
+
+    def region(self, name: str) -> Assembler:
+        return next(a for a in self.assemblers if a.region == name)
+
+    def reaction(self, rl: np.ndarray, fields, boundaries=None) -> float:
+        """Sum over ranks of the (SI) residual rows of Dirichlet-constrained
+        dofs of ``fields`` (on ``boundaries``, default all): the net inflow
+        through those boundaries (the variationally consistent flux)."""
+        idx = [dd.dofs.ravel() for d, dd in self._bc if dd.field in fields and dd.dofs.size
+               and (boundaries is None or dd.boundary in boundaries)]
+        idx = np.unique(np.concatenate(idx)) if idx else np.zeros(0, dtype=compat.INT)
+        acc = float(np.sum(rl[idx] / self.inv_rscale[idx]))
+        return self.dm.comm.tompi4py().allreduce(acc)
+
+    def dirichlet_boundaries(self, fields) -> list[str]:
+        """Names of the boundaries with Dirichlet conditions on ``fields`` (all ranks)."""
+        return sorted({d.boundary for d in self._dirichlet if d.field in fields})
+
+    def well_inflow(self, xl, t, field: str) -> tuple[float, float]:
+        """(net inflow, sum of |inflow| over the wells) (SI) into ``field``'s
+        equation from the well terms."""
+        net = tot = 0.0
+        for p in self.points:
+            if p.dofs and field in p.dofs:
+                q = -p.term.residual(p.values(xl, self.scales), t).get(field, 0.0)
+                net, tot = net + q, tot + abs(q)
+        return tuple(self.dm.comm.tompi4py().allreduce([net, tot]))
+
+    # -- evaluation --------------------------------------------------------------
+    def local_residual(self, xl, xdl, t) -> np.ndarray:
+        """Scaled local residual of all regions and well terms (rows of every
+        local dof, constrained and tied ones included)."""
+        r = self.assemblers[0].residual(xl, xdl, t)
+        for a in self.assemblers[1:]:
+            r += a.residual(xl, xdl, t)
+        for p in self.points:
+            p.add_residual(r, xl, t, self.scales, self.inv_rscale)
+        return r
+
     def ifunction(self, ts, t, X, Xdot, F):
         self._ev_res.begin()
         xl, xdl = self.local_arrays(X, t, Xdot)
-        self._Fl.getArray()[:] = self.asm.residual(xl, xdl, t)
+        rl = self.local_residual(xl, xdl, t)
+        self._Fl.getArray()[:] = rl
         F.zeroEntries()
         self.dm.localToGlobal(self._Fl, F, addv=PETSc.InsertMode.ADD_VALUES)
+        self._tie_add(rl, F)
         self._ev_res.end()
+
+    def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
+        vals = [a.jacobian_values(xl, xdl, t, shift) for a in self.assemblers]
+        vals += [p.jacobian_values(xl, t, self.scales, self.inv_rscale) for p in self.points]
+        return np.concatenate(vals)
 
     def ijacobian(self, ts, t, X, Xdot, shift, J, P):
         self._ev_jac.begin()
         xl, xdl = self.local_arrays(X, t, Xdot)
-        compat.coo_set_values(P, self.asm.jacobian_values(xl, xdl, t, shift))
+        compat.coo_set_values(P, self.jacobian_values(xl, xdl, t, shift))
         P.assemble()
         if J != P:
             J.assemble()
@@ -151,7 +261,10 @@ class Problem:
 
     def create_matrix(self) -> PETSc.Mat:
         if self.J is None:
-            self.J = self.asm.create_matrix()
+            rows = [a.coo_rows for a in self.assemblers] + [p.coo_rows for p in self.points]
+            cols = [a.coo_cols for a in self.assemblers] + [p.coo_cols for p in self.points]
+            self.J = self.dm.createMat()
+            compat.coo_preallocate(self.J, np.concatenate(rows), np.concatenate(cols))
         return self.J
 
     def auto_residual_scales(self, t: float, shift: float) -> dict[str, float]:
@@ -161,7 +274,8 @@ class Problem:
         xl, xdl = self.local_arrays(self.X, t)
         for sc in self.scales.values():
             sc.rscale = 1.0
-        compat.coo_set_values(J, self.asm.jacobian_values(xl, xdl, t, shift))
+        self._update_row_scales()
+        compat.coo_set_values(J, self.jacobian_values(xl, xdl, t, shift))
         J.assemble()
         diag = J.getDiagonal()
         names, isets, sub = self.dm.createFieldDecomposition()
@@ -173,7 +287,58 @@ class Problem:
             diag.restoreSubVector(iset, d)
             self.scales[name].rscale = mean if mean > 0 and math.isfinite(mean) else 1.0
             out[name] = self.scales[name].rscale
+        self._update_row_scales()
         return out
+
+    def _update_row_scales(self):
+        self.inv_rscale[:] = Assembler.default_inv_rscale(self.disc, self.scales)
+
+
+class _PointDofs:
+    """A ``PointTerm`` located: the local dofs of its fields at the node, on the
+    rank that owns the node (other ranks hold it with no dofs)."""
+
+    def __init__(self, disc: Discretisation, term):
+        self.term = term
+        mesh = disc.mesh
+        f0 = term.fields[0]
+        pts = disc.support[f0]
+        X = mesh.point_coordinates(pts)
+        dist = np.linalg.norm(X - np.asarray(term.point)[None, :mesh.dim], axis=1) if len(pts) else np.zeros(0)
+        here = np.flatnonzero(dist < 1e-9 * max(float(mesh.h.max()) if mesh.ncells else 1.0, 1e-300))
+        lo, hi = disc.ownership_range()
+        self.dofs = {}
+        if len(here):
+            p = pts[here[0]]
+            dofs = {f: int(disc.offsets[f][p - disc.pstart]) for f in term.fields}
+            g = disc.global_index[dofs[f0]]
+            if lo <= g < hi:
+                self.dofs = dofs
+        found = mesh.dm.comm.tompi4py().allreduce(int(bool(self.dofs)))
+        if found != 1:
+            raise ValueError(f"well '{term.name}' at {tuple(term.point)}: no {f0} node there "
+                             "(wells must sit on a mesh vertex of the fracture)")
+        pairs = list(term.jacobian({f: 0.0 for f in term.fields}, 0.0).keys()) if self.dofs else []
+        self.pairs = pairs
+        g = disc.global_index
+        self.coo_rows = np.asarray([g[self.dofs[a]] for a, b in pairs], dtype=compat.INT)
+        self.coo_cols = np.asarray([g[self.dofs[b]] for a, b in pairs], dtype=compat.INT)
+
+    def values(self, xl, scales) -> dict:
+        return {f: xl[d] * scales[f].scale + scales[f].offset for f, d in self.dofs.items()}
+
+    def add_residual(self, r, xl, t, scales, inv_rscale):
+        if not self.dofs:
+            return
+        for f, v in self.term.residual(self.values(xl, scales), t).items():
+            r[self.dofs[f]] += v * inv_rscale[self.dofs[f]]
+
+    def jacobian_values(self, xl, t, scales, inv_rscale) -> np.ndarray:
+        if not self.dofs:
+            return np.zeros(0)
+        jac = self.term.jacobian(self.values(xl, scales), t)
+        return np.asarray([jac[(a, b)] * inv_rscale[self.dofs[a]] * scales[b].scale
+                           for a, b in self.pairs], dtype=float)
 
 
 class TimeStepper:
@@ -203,12 +368,21 @@ class TimeStepper:
         ts.setMonitor(self._monitor)
         self.rejected = 0
         self.error = None
+        self._last_dt_cut = None
 
     def _post_step(self, ts):
         """Grow the step, clipped to the largest step and to the final time."""
         c = self.control
+        t = ts.getTime()
         dt = min(ts.getTimeStep() * c.growth, c.dt_max)
-        remaining = c.final_time - ts.getTime()
+        if self._last_dt_cut is not None:        # resume the growth sequence after a hit
+            dt = min(self._last_dt_cut, c.dt_max)
+            self._last_dt_cut = None
+        remaining = c.final_time - t
+        upcoming = [h - t for h in c.hit_times if h - t > 1e-9 * max(abs(t), 1.0)]
+        if upcoming and min(upcoming) < dt * (1 + 1e-9):
+            self._last_dt_cut = dt
+            dt = min(upcoming)
         if remaining > 0:
             ts.setTimeStep(min(dt, remaining))
 

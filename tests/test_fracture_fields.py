@@ -29,11 +29,11 @@ def _fracture_problem(path, dim, degree, exact, source=0.0):
 
     def g3(ctx):
         return (k * np.eye(dim))[None, None, None, :, None, :]
-    model = Model([FieldSpec("pf", 1, degree, region="fracture")], [CellResidual("pf", f0, f1)],
-                  [CellJacobian("pf", "pf", g3=g3)])
+    model = Model([FieldSpec("pf", 1, degree, region="fracture")], [CellResidual("pf", f0, f1, region="fracture")],
+                  [CellJacobian("pf", "pf", g3=g3, region="fracture")])
     disc = Discretisation(mesh, model.fields, {"pf": ["x0", "x1"]}, regions={"fracture": surf})
     bcs = [Dirichlet("pf", b, lambda x, t: exact(x)) for b in ("x0", "x1")]
-    return Problem(disc, model, {"pf": FieldScale(1.0)}, bcs, region=surf), surf
+    return Problem(disc, model, {"pf": FieldScale(1.0)}, bcs), surf
 
 
 def solve_and_error(problem, exact):

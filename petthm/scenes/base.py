@@ -68,13 +68,20 @@ class Scene:
     parameter_sets: tuple = ()
     time: TimeDefaults = TimeDefaults(1.0, 0.1)
     history_columns: tuple = ()
+    fractured: bool = False          # split the mesh along its fractures (physics.md section 1)
 
     def __init__(self, run: P.RunParams, values: dict):
         self.run = run
         self.p = values                         # {class: frozen instance}
 
     def __getitem__(self, cls):
-        return self.p[cls]
+        """The parameter object of a set (or of its ``with_defaults`` variant)."""
+        if cls in self.p:
+            return self.p[cls]
+        for k, v in self.p.items():
+            if issubclass(k, cls):
+                return v
+        raise KeyError(cls.__name__)
 
     # hooks ------------------------------------------------------------------
     def boundaries(self) -> dict[str, Callable[[np.ndarray], np.ndarray]]:
@@ -87,8 +94,17 @@ class Scene:
         """Return (model, dirichlet list, scales, initial-value functions)."""
         raise NotImplementedError
 
-    def monitors(self, problem, t: float) -> dict:
+    def monitors(self, problem, t: float, X=None) -> dict:
         return {}
+
+    def solver_defaults(self, comm) -> dict[str, str]:
+        """Solver options this scene proposes over ``solver.SOLVER_DEFAULTS``
+        (the user's options still win)."""
+        return {}
+
+    def hit_times(self) -> list[float]:
+        """Times the time stepper must land on exactly (reference comparisons)."""
+        return []
 
     def report(self, problem, t: float) -> dict:
         return {}

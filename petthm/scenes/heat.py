@@ -200,7 +200,7 @@ class HeatErfc(Scene):
         p = self[ErfcParams]
         return comm.allreduce(err, op=_max()) / abs(p.initial_temperature - p.surface_temperature)
 
-    def monitors(self, problem, t):
+    def monitors(self, problem, t, X=None):
         T = problem.field_values(FIELD, t=t)[:, 0]
         x = problem.disc.field_node_coordinates(FIELD)
         out = {}
@@ -274,7 +274,7 @@ class HeatAdvection(Scene):
         hmin = mesh.dm.comm.tompi4py().allreduce(float(mesh.h.min()) if mesh.ncells else np.inf, op=_minloc())
         return w * hmin / (2 * kappa)
 
-    def monitors(self, problem, t):
+    def monitors(self, problem, t, X=None):
         p = self[AdvectionParams]
         T = problem.field_values(FIELD, t=t)[:, 0] - CELSIUS
         comm = problem.disc.mesh.dm.comm.tompi4py()
