@@ -222,7 +222,7 @@ class Problem:
             if p.dofs and field in p.dofs:
                 q = -p.term.residual(p.values(xl, self.scales), t).get(field, 0.0)
                 net, tot = net + q, tot + abs(q)
-        return tuple(self.dm.comm.tompi4py().allreduce([net, tot]))
+        return tuple(float(v) for v in self.dm.comm.tompi4py().allreduce(np.array([net, tot])))
 
     # -- evaluation --------------------------------------------------------------
     def local_residual(self, xl, xdl, t) -> np.ndarray:

@@ -166,15 +166,20 @@ class FractureScene(Scene):
         return next(v for k, v in self.p.items() if issubclass(k, HeatMaterial))
 
     def balances(self, heat: bool) -> list[Conserved]:
-        """Fluid volume and (with heat) energy balances of physics.md section 7."""
+        """Fluid volume and (with heat) energy balances of physics.md section 7.
+
+        The stored amounts are integrated relative to the initial pressure and
+        temperature (constants drop out of the change, and the subtraction of
+        two large integrals would lose digits); enthalpy fluxes are in kelvin."""
         frac_flow, matrix_flow = self._flows
-        m = self.material
+        m, w = self.material, self[Wells]
+        p0, T0 = w.initial_pressure, w.initial_temperature + CELSIUS
 
         def vol(fl):
             def f(ctx):
-                s = fl.storage * ctx.value(fl.p)[..., 0]
+                s = fl.storage * (ctx.value(fl.p)[..., 0] - p0)
                 if fl.T is not None and fl.thermal_storage:
-                    s = s - fl.thermal_storage * ctx.value(fl.T)[..., 0]
+                    s = s - fl.thermal_storage * (ctx.value(fl.T)[..., 0] - T0)
                 return s
             return f
         storage = {"fracture": vol(frac_flow)}
@@ -184,8 +189,8 @@ class FractureScene(Scene):
         if heat:
             a = self[FractureProps].fracture_aperture
             out.append(Conserved("energy", ("Tf", "Tm"), "Tf", {
-                "fracture": lambda ctx: a * m.fluid_rho_c * ctx.value("Tf")[..., 0],
-                "matrix": lambda ctx: m.rho_c * ctx.value("Tm")[..., 0]}))
+                "fracture": lambda ctx: a * m.fluid_rho_c * (ctx.value("Tf")[..., 0] - T0),
+                "matrix": lambda ctx: m.rho_c * (ctx.value("Tm")[..., 0] - T0)}))
         return out
 
     def well_terms(self, mesh, injector_at, producer_at, heat: bool):
@@ -328,7 +333,8 @@ class RadialParams:
 class RadialFlow(FractureScene):
     name = "radial_flow"
     description = "point injector in a disc fracture: p = p_R + Q/(2 pi T_h) ln(R/r) (verification.md 3b)"
-    parameter_sets = (FluidFlow, with_defaults(FractureProps, fracture_aperture=2e-4), HeatMaterial,
+    parameter_sets = (with_defaults(FluidFlow, fluid_compressibility=0.0),
+                      with_defaults(FractureProps, fracture_aperture=2e-4), HeatMaterial,
                       with_defaults(Wells, injection_rate=1e-3), RadialParams)
     time = TimeDefaults(final_time=1.0, dt_initial=1.0, mesh_size=25.0)
     history_columns = ("injection_pressure", "error_5h", "mass_balance")
@@ -363,16 +369,18 @@ class RadialFlow(FractureScene):
         return model, bcs, scales, {"pf": lambda x: np.full(len(x), p.radial_rim_pressure)}
 
     def _error(self, problem, t, X=None):
-        """Max |p - p_exact| / (p_exact - p_R) over fracture nodes at r >= 5 h_well."""
+        """Max |p - p_exact| over fracture nodes at r >= 5 h_well, relative to
+        the largest pressure rise p_exact - p_R among them (verification.md 3b)."""
         p = self[RadialParams]
         comm = problem.dm.comm.tompi4py()
         v = problem.field_values("pf", X, t)[:, 0]
         x = problem.disc.field_node_coordinates("pf")
         r = np.linalg.norm(x - self.centre()[None, :], axis=1)
-        sel = (r >= 5 * p.radial_well_size) & (r <= 0.99 * p.radial_radius)
+        sel = r >= 5 * p.radial_well_size
         ex = self.exact(x[sel])
-        e = float(np.max(np.abs(v[sel] - ex) / (ex - p.radial_rim_pressure))) if sel.any() else 0.0
-        return comm.allreduce(e, op=_max())
+        e = comm.allreduce(float(np.max(np.abs(v[sel] - ex))) if sel.any() else 0.0, op=_max())
+        rise = comm.allreduce(float(np.max(ex - p.radial_rim_pressure)) if sel.any() else 0.0, op=_max())
+        return e / rise
 
     def monitors(self, problem, t, X=None):
         out = {"injection_pressure": problem.point_value("pf", tuple(self.centre()), X, t),
@@ -392,7 +400,7 @@ class LeakoffParams:
     leakoff_width: float = param(60.0, "m", "matrix on each side of the fracture", lo=0.0, lo_open=True)
     leakoff_pressure_step: float = param(1e6, "Pa", "fracture overpressure dp for t > 0", lo=0.0, lo_open=True)
     leakoff_storage: float = param(1e-9, "1/Pa", "matrix storage S", lo=0.0, lo_open=True)
-    leakoff_fracture_size: float = param(0.1, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+    leakoff_fracture_size: float = param(0.05, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -407,7 +415,7 @@ class Leakoff1D(FractureScene):
     description = "fracture pressure step: cumulative leakoff 4 dp S L sqrt(c t/pi) (both faces)"
     parameter_sets = (FluidFlow, FractureProps, with_defaults(HeatMaterial), with_defaults(Wells, initial_pressure=0.0),
                       LeakoffParams, LeakoffPerm)
-    time = TimeDefaults(final_time=1e5, dt_initial=1.0, dt_growth=1.1, dt_max=2e3, mesh_size=5.0)
+    time = TimeDefaults(final_time=1e5, dt_initial=1.0, dt_growth=1.05, dt_max=2e3, mesh_size=5.0)
     history_columns = ("leakoff_rate", "leakoff_volume", "leakoff_stored", "leakoff_exact", "leakoff_error",
                        "mass_balance")
     _heat = False
