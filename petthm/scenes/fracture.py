@@ -172,7 +172,8 @@ class FractureScene(Scene):
         temperature (constants drop out of the change, and the subtraction of
         two large integrals would lose digits); enthalpy fluxes are in kelvin."""
         frac_flow, matrix_flow = self._flows
-        m, w = self.material, self[Wells]
+        m = self.material
+        w = next((v for k, v in self.p.items() if issubclass(k, Wells)), Wells())
         p0, T0 = w.initial_pressure, w.initial_temperature + CELSIUS
 
         def vol(fl):
