@@ -495,6 +495,10 @@ class LauwerierParams:
                                     lo=0.0, lo_open=True)
     lauwerier_width: float = param(60.0, "m", "rock on each side of the fracture", lo=0.0, lo_open=True)
     lauwerier_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+    lauwerier_dim: int = param(2, "-", "2: plane strain (H = 1 m); 3: a slab of height H with line wells",
+                               choices=(2, 3))
+    lauwerier_height: float = param(1.0, "m", "slab height H (3D; Q is the slab's total rate)",
+                                    lo=0.0, lo_open=True)
 
 
 @register
@@ -510,24 +514,88 @@ class Lauwerier(FractureScene):
     profile_times = (1e7, 1e8)
 
     def boundaries(self):
-        W = self[LauwerierParams].lauwerier_width
-        return {"far": lambda x: np.isclose(x[:, 1], 0.0) | np.isclose(x[:, 1], 2 * W)}
+        p = self[LauwerierParams]
+        W, n = p.lauwerier_width, p.lauwerier_dim - 1          # the normal axis: y (2D) or z (3D)
+        return {"far": lambda x: np.isclose(x[:, n], 0.0) | np.isclose(x[:, n], 2 * W)}
 
     def generate_mesh(self, path, size):
         p = self[LauwerierParams]
-        L, W = p.lauwerier_length, p.lauwerier_width
-        fr = [meshing.Fracture("segment", p0=(0.0, W), p1=(L, W), size=p.lauwerier_fracture_size)]
-        return meshing.box_with_fractures(path, [L, 2 * W], size, fr, grading_distance=0.5 * W)
+        L, W, H = p.lauwerier_length, p.lauwerier_width, p.lauwerier_height
+        if p.lauwerier_dim == 2:
+            fr = [meshing.Fracture("segment", p0=(0.0, W), p1=(L, W), size=p.lauwerier_fracture_size)]
+            return meshing.box_with_fractures(path, [L, 2 * W], size, fr, grading_distance=0.5 * W)
+        fr = [meshing.Fracture("rectangle", center=(0.5 * L, 0.5 * H, W), half=(0.5 * L, 0.5 * H),
+                               size=p.lauwerier_fracture_size)]
+        return meshing.box_with_fractures(path, [L, H, 2 * W], size, fr, grading_distance=0.5 * W)
 
     def wells_at(self):
         p = self[LauwerierParams]
         return (0.0, p.lauwerier_width), (p.lauwerier_length, p.lauwerier_width)
 
+    def line_nodes(self, mesh, degree, x_line):
+        """The fracture nodes on the well line x = x_line (3D slab), sorted by y, with
+        the consistent nodal weights of a uniform line density (sum = H)."""
+        surf, comm = mesh.fracture, mesh.dm.comm.tompi4py()
+        pts = [mesh.vertex_coords[surf.cell_vertices.ravel()]]
+        if degree == 2:
+            pts.append(mesh.edge_midpoints()[surf.cell_edges.ravel() - mesh.estart])
+        X = np.concatenate(pts)
+        X = X[np.abs(X[:, 0] - x_line) < 1e-9 * self[LauwerierParams].lauwerier_length]
+        X = np.concatenate(comm.allgather(X))
+        X = X[np.argsort(X[:, 1])]
+        X = X[np.concatenate([[True], np.diff(X[:, 1]) > 1e-12])]
+        y = X[:, 1]
+        w = np.zeros(len(y))
+        step = 2 if degree == 2 else 1
+        for k in range(0, len(y) - 1, step):          # elements [y_k, y_k+step]
+            h = y[k + step] - y[k]
+            if degree == 2:
+                w[k] += h / 6
+                w[k + 1] += 2 * h / 3
+                w[k + 2] += h / 6
+            else:
+                w[k] += h / 2
+                w[k + 1] += h / 2
+        return X, w
+
+    def slab_wells(self, mesh, degree):
+        """Line injector at x = 0 and line producer at x = L (3D slab)."""
+        p, w, fp = self[LauwerierParams], self[Wells], self[FractureProps]
+        rho_c = self.material.fluid_rho_c
+        mu = _viscosity(self[FluidFlow])
+        Th = fp.fracture_aperture ** 3 / (12 * mu.mu(w.initial_temperature + CELSIUS))
+        PI_line = wells.well_index(float(Th), 0.0, w.well_radius, 1)          # per metre of line
+        Xi, wi = self.line_nodes(mesh, degree, 0.0)
+        Xp, wp = self.line_nodes(mesh, degree, p.lauwerier_length)
+        H = p.lauwerier_height
+        out = [wells.injector(tuple(x), w.injection_rate * c / H, rho_c, w.injection_temperature + CELSIUS,
+                              name=f"injector_{i}") for i, (x, c) in enumerate(zip(Xi, wi))]
+        out += [wells.producer(tuple(x), w.production_pressure, PI_line * c, rho_c, name=f"producer_{i}")
+                for i, (x, c) in enumerate(zip(Xp, wp))]
+        self.wells = out
+        self._slab = (Xi, wi, Xp, wp)
+        return out
+
+    def slab_monitors(self, problem, t, X):
+        """Injection pressure: mean over the inlet line; production: rate and the
+        flow-weighted temperature of the outlet line."""
+        Xi, wi, Xp, wp = self._slab
+        pin = [problem.point_value("pf", x, X, t) for x in Xi]
+        qs, Ts = [], []
+        for term, x in zip([w for w in self.wells if w.name.startswith("producer")], Xp):
+            v = {"pf": problem.point_value("pf", x, X, t), "Tf": problem.point_value("Tf", x, X, t)}
+            qs.append(term.residual(v, t)["pf"])
+            Ts.append(v["Tf"])
+        qs, Ts = np.array(qs), np.array(Ts)
+        return {"injection_pressure": float(np.dot(pin, wi) / wi.sum()), "production_rate": float(qs.sum()),
+                "production_temperature": float(np.dot(qs, Ts) / qs.sum()) - CELSIUS}
+
     def exact(self, x, t):
         """Lauwerier's T_f(x, t) in kelvin (with the transit delay t_d = a x / q)."""
         w, m, fp = self[Wells], self[Rock1], self[FractureProps]
         T0, Ti = w.initial_temperature + CELSIUS, w.injection_temperature + CELSIUS
-        q = w.injection_rate
+        lp = self[LauwerierParams]
+        q = w.injection_rate / (lp.lauwerier_height if lp.lauwerier_dim == 3 else 1.0)
         lam, kappa = m.conductivity, m.conductivity / m.rho_c
         td = fp.fracture_aperture * x / q
         tt = np.maximum(t - td, 1e-300)
@@ -541,11 +609,15 @@ class Lauwerier(FractureScene):
         w = self[Wells]
         self._worst, self._profile, self._outlet = {}, {}, []
         model = self.fracture_model(mesh, degree, heat=True)
-        inj, prod = self.wells_at()
-        model.points.extend(self.well_terms(mesh, inj, prod, heat=True))
+        if self[LauwerierParams].lauwerier_dim == 3:
+            model.points.extend(self.slab_wells(mesh, degree))
+        else:
+            inj, prod = self.wells_at()
+            model.points.extend(self.well_terms(mesh, inj, prod, heat=True))
         T0, Ti = w.initial_temperature + CELSIUS, w.injection_temperature + CELSIUS
         bcs = [Dirichlet("Tm", "far", lambda x, t: np.full(len(x), T0))]
         Th = self[FractureProps].fracture_aperture ** 3 / 12 / _viscosity(self[FluidFlow]).mu(Ti)
+        Th = Th * self[LauwerierParams].lauwerier_height if self[LauwerierParams].lauwerier_dim == 3 else Th
         dp = float(w.injection_rate * self[LauwerierParams].lauwerier_length / Th)
         sT = FieldScale(abs(T0 - Ti) or 1.0, T0)
         scales = {"pf": FieldScale(dp, w.production_pressure), "Tf": sT, "Tm": FieldScale(sT.scale, sT.offset)}
@@ -568,7 +640,10 @@ class Lauwerier(FractureScene):
     def monitors(self, problem, t, X=None):
         w = self[Wells]
         inj, prod = self.wells_at()
-        out = self.well_monitors(problem, t, X, inj, prod, heat=True)
+        if self[LauwerierParams].lauwerier_dim == 3:
+            out = self.slab_monitors(problem, t, X)
+        else:
+            out = self.well_monitors(problem, t, X, inj, prod, heat=True)
         dT = abs(w.initial_temperature - w.injection_temperature)
         ex = float(self.exact(np.array([prod[0]]), t)[0]) - CELSIUS
         out["outlet_error"] = abs(out["production_temperature"] - ex) / dT
