@@ -48,8 +48,13 @@ class BalanceMonitor:
         return out
 
     def __call__(self, t: float, X) -> dict:
-        """Balance residuals of the step that ended at ``t`` (0 at the first call)."""
+        """Balance residuals of the step that ended at ``t`` (0 at the first call);
+        NaN unless the time integrator is backward Euler (the step's rate is
+        taken as (X - X_prev)/dt)."""
+        from petsc4py import PETSc
         pb = self.problem
+        if PETSc.Options().getString("ts_type", "beuler") not in ("beuler", "be"):
+            return {f"{b.name}_balance": float("nan") for b in self.balances}
         if self._prev is None:
             xl, _ = pb.local_arrays(X, t)
             self._prev = (t, X.copy(), self.stored(xl, t))

@@ -65,7 +65,7 @@ class Heat:
     region: str
     T: str
     capacity: float                 # C
-    conductivity: float             # L
+    conductivity: object            # L: a number, or a (d, d) tensor (no advection then)
     fluid_rho_c: float = 0.0        # rho_f C_f (0: no advection)
     flow: Optional[Flow] = None     # the flow that advects heat
     degree: int = 2
@@ -171,6 +171,11 @@ class _HeatPoint:
                 + (tau * R)[..., None, None] * eye)
 
 
+def _conduction(h: Heat, gT):
+    L = h.conductivity
+    return L * gT if np.isscalar(L) else np.einsum("ab,cqb->cqa", L, gT)
+
+
 def heat_f0(h: Heat, ctx):
     r = h.capacity * ctx.dot(h.T)[..., 0]
     return r[..., None]
@@ -178,7 +183,7 @@ def heat_f0(h: Heat, ctx):
 
 def heat_f1(h: Heat, ctx):
     hp = _HeatPoint(h, ctx)
-    f1 = h.conductivity * hp.gT
+    f1 = _conduction(h, hp.gT)
     if hp.advect:
         f1 = f1 - hp.b * hp.Tv[..., None]
         if h.supg:
@@ -203,7 +208,8 @@ def heat_g2_TT(h: Heat, ctx):
 
 def heat_g3_TT(h: Heat, ctx):
     d = ctx.dim
-    g = h.conductivity * np.eye(d)[None, None]
+    L = h.conductivity
+    g = (L * np.eye(d) if np.isscalar(L) else np.asarray(L))[None, None]
     if h.supg:
         hp = _HeatPoint(h, ctx)
         g = g + hp.tau[..., None, None] * hp.b[..., :, None] * hp.b[..., None, :]
@@ -233,6 +239,8 @@ def heat_g2_exchange(h: Heat, hw: float, ctx):
 
 def heat_terms(h: Heat) -> tuple[list, list]:
     advect = h.flow is not None and h.fluid_rho_c != 0.0
+    if advect and not np.isscalar(h.conductivity):
+        raise ValueError("a conductivity tensor is only supported without advection")
     supg = advect and h.supg
     hh = h if advect else Heat(h.region, h.T, h.capacity, h.conductivity, 0.0, None, h.degree, False,
                                h.exchange)

@@ -65,3 +65,19 @@ def well_index(transmissivity: float, h: float, well_radius: float, flow_dim: in
         return 2.0 * transmissivity / well_radius
     re = max(0.2 * h, 2.0 * well_radius)
     return 2.0 * math.pi * transmissivity / math.log(re / well_radius)
+
+
+def rate_producer(point, rate: float, rho_c: float, p: str = "pf", T: str | None = "Tf",
+                  name: str = "producer") -> PointTerm:
+    """A producer at a prescribed rate Q_p (m3/s) that carries rho_f C_f Q_p T_f out."""
+    fields = (p,) + ((T,) if T else ())
+
+    def residual(v, t):
+        r = {p: rate}
+        if T:
+            r[T] = rho_c * rate * v[T]
+        return r
+
+    def jacobian(v, t):
+        return {(T, T): rho_c * rate} if T else {}
+    return PointTerm(name, tuple(point), fields, residual, jacobian)

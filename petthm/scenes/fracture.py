@@ -116,7 +116,7 @@ class FractureScene(Scene):
         return direct_solver_defaults(comm)
 
     def fracture_model(self, mesh, degree, *, heat: bool, permeability=None, matrix_storage=0.0,
-                       matrix_thermal_storage=0.0, wells_on=True) -> Model:
+                       matrix_thermal_storage=0.0, wells_on=True, rock_conductivity=None) -> Model:
         """Fields, terms and ties: pf (+ Tf, Tm with ``heat``; + pm with a
         ``permeability`` tensor)."""
         fl, fp, m = self[FluidFlow], self[FractureProps], self.material
@@ -155,7 +155,8 @@ class FractureScene(Scene):
                                 frac_flow, degree, True, exchange)
             r, j = tr.heat_terms(frac_heat)
             res, jac = res + r, jac + j
-            mat_heat = tr.Heat("matrix", "Tm", m.rho_c, m.conductivity, m.fluid_rho_c, matrix_flow, degree, True)
+            lam = m.conductivity if rock_conductivity is None else rock_conductivity
+            mat_heat = tr.Heat("matrix", "Tm", m.rho_c, lam, m.fluid_rho_c, matrix_flow, degree, True)
             r, j = tr.heat_terms(mat_heat)
             res, jac = res + r, jac + j
         self._flows = (frac_flow, matrix_flow)
@@ -237,7 +238,8 @@ class FractureScene(Scene):
         out = self._balance(t, X)
         for k in ("mass_balance", "energy_balance"):
             if k in out:
-                self._worst[k] = max(self._worst.get(k, 0.0), abs(out[k]))
+                v = abs(out[k])
+                self._worst[k] = v if v != v else max(self._worst.get(k, 0.0), v)   # NaN: not evaluated
         return out
 
 
@@ -487,6 +489,18 @@ class Leakoff1D(FractureScene):
                 "balance_max": self._worst}
 
 
+def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T0, Ti):
+    """Lauwerier (1955) fracture temperature (verification.md section 1):
+    T0 + (Ti - T0) erfc(lambda x / (rho_f c_f q sqrt(kappa (t - t_d)))) U(t - t_d),
+    t_d = a x / q, kappa = lambda / (rho C); q per metre of fracture height."""
+    x = np.asarray(x, dtype=float)
+    kappa = conductivity / rho_c
+    td = aperture * x / q
+    tt = np.maximum(t - td, 1e-300)
+    arg = conductivity * x / (fluid_rho_c * q * np.sqrt(kappa * tt))
+    return np.where(t > td, T0 + (Ti - T0) * erfc(arg), T0)
+
+
 # -- lauwerier ---------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class LauwerierParams:
@@ -499,6 +513,9 @@ class LauwerierParams:
                                choices=(2, 3))
     lauwerier_height: float = param(1.0, "m", "slab height H (3D; Q is the slab's total rate)",
                                     lo=0.0, lo_open=True)
+    lauwerier_rock_conduction: str = param("full", "-", "full, or normal: conduction in the rock only "
+                                           "normal to the fracture (the analytical solution's assumption)",
+                                           choices=("full", "normal"))
 
 
 @register
@@ -593,14 +610,10 @@ class Lauwerier(FractureScene):
     def exact(self, x, t):
         """Lauwerier's T_f(x, t) in kelvin (with the transit delay t_d = a x / q)."""
         w, m, fp = self[Wells], self[Rock1], self[FractureProps]
-        T0, Ti = w.initial_temperature + CELSIUS, w.injection_temperature + CELSIUS
         lp = self[LauwerierParams]
         q = w.injection_rate / (lp.lauwerier_height if lp.lauwerier_dim == 3 else 1.0)
-        lam, kappa = m.conductivity, m.conductivity / m.rho_c
-        td = fp.fracture_aperture * x / q
-        tt = np.maximum(t - td, 1e-300)
-        arg = lam * x / (m.fluid_rho_c * q * np.sqrt(kappa * tt))
-        return np.where(t > td, T0 + (Ti - T0) * erfc(arg), T0)
+        return lauwerier_temperature(x, t, q, fp.fracture_aperture, m.rho_c, m.conductivity, m.fluid_rho_c,
+                                     w.initial_temperature + CELSIUS, w.injection_temperature + CELSIUS)
 
     def hit_times(self):
         return [1e6, 1e7, 1e8]
@@ -608,7 +621,12 @@ class Lauwerier(FractureScene):
     def build(self, mesh, degree):
         w = self[Wells]
         self._worst, self._profile, self._outlet = {}, {}, []
-        model = self.fracture_model(mesh, degree, heat=True)
+        lp = self[LauwerierParams]
+        lam = None
+        if lp.lauwerier_rock_conduction == "normal":       # only across the fracture
+            lam = np.zeros((mesh.dim, mesh.dim))
+            lam[mesh.dim - 1, mesh.dim - 1] = self.material.conductivity
+        model = self.fracture_model(mesh, degree, heat=True, rock_conductivity=lam)
         if self[LauwerierParams].lauwerier_dim == 3:
             model.points.extend(self.slab_wells(mesh, degree))
         else:
@@ -789,3 +807,106 @@ class RigidFracture(FractureScene):
                 json.dump(self._profile, f)
             out["profile_file"] = os.path.basename(path)
         return out
+
+
+# -- leakoff_heat (verification.md section 2) -------------------------------------------------------
+@dataclass(frozen=True)
+class LeakoffHeatParams:
+    """Fracture heat transport with a uniform leakoff fraction m (leakoff_heat; verification.md 2)"""
+    leakoff_fraction: float = param(0.25, "-", "fraction m of the injected rate lost over the fracture",
+                                    lo=0.0, hi=1.0, lo_open=True)
+    leakoff_heat_length: float = param(100.0, "m", "fracture length L", lo=0.0, lo_open=True)
+    leakoff_heat_width: float = param(60.0, "m", "matrix on each side (pressure p_W there)", lo=0.0, lo_open=True)
+    leakoff_heat_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+    leakoff_heat_permeability: float = param(1e-14, "m2", "matrix permeability", lo=0.0, lo_open=True)
+
+
+@register
+class LeakoffHeat(FractureScene):
+    name = "leakoff_heat"
+    description = "uniform leakoff fraction m: outlet temperature vs the Laplace-domain solution (verification.md 2)"
+    parameter_sets = (with_defaults(FluidFlow, fluid_compressibility=0.0, fluid_thermal_expansion=0.0),
+                      with_defaults(FractureProps, fracture_aperture=3e-3), Rock1, Wells, LeakoffHeatParams)
+    time = TimeDefaults(final_time=1e8, dt_initial=100.0, dt_growth=1.03, dt_max=5e5, mesh_size=10.0,
+                        output_interval=25)
+    history_columns = ("injection_pressure", "production_temperature", "production_rate", "leakoff_rate",
+                       "outlet_error", "mass_balance", "energy_balance")
+    _heat = True
+
+    def boundaries(self):
+        W = self[LeakoffHeatParams].leakoff_heat_width
+        return {"far": lambda x: np.isclose(x[:, 1], 0.0) | np.isclose(x[:, 1], 2 * W)}
+
+    def generate_mesh(self, path, size):
+        p = self[LeakoffHeatParams]
+        L, W = p.leakoff_heat_length, p.leakoff_heat_width
+        fr = [meshing.Fracture("segment", p0=(0.0, W), p1=(L, W), size=p.leakoff_heat_fracture_size)]
+        return meshing.box_with_fractures(path, [L, 2 * W], size, fr, grading_distance=0.5 * W)
+
+    def wells_at(self):
+        p = self[LeakoffHeatParams]
+        return (0.0, p.leakoff_heat_width), (p.leakoff_heat_length, p.leakoff_heat_width)
+
+    def overpressure(self):
+        """p_f - p_W giving the leakoff velocity v_L = m q0 / (2L) = k dp / (mu W)."""
+        p, w = self[LeakoffHeatParams], self[Wells]
+        mu = _viscosity(self[FluidFlow]).value
+        vL = p.leakoff_fraction * w.injection_rate / (2 * p.leakoff_heat_length)
+        return vL * mu * p.leakoff_heat_width / p.leakoff_heat_permeability
+
+    def exact_outlet(self, t):
+        from ..analytic import leakoff_outlet_temperature
+        p, w, m = self[LeakoffHeatParams], self[Wells], self[Rock1]
+        return leakoff_outlet_temperature(
+            p.leakoff_heat_length, t, q0=w.injection_rate, m=p.leakoff_fraction, L=p.leakoff_heat_length,
+            fluid_rho_c=m.fluid_rho_c, rock_rho_c=m.rho_c, rock_conductivity=m.conductivity,
+            T0=w.initial_temperature, Tinj=w.injection_temperature, advection=True)
+
+    def hit_times(self):
+        return [1e6, 1e7, 1e8]
+
+    def build(self, mesh, degree):
+        p, w = self[LeakoffHeatParams], self[Wells]
+        m = self.material
+        if m.rock_porosity != 0:
+            raise InputError("option -thm_rock_porosity: leakoff_heat needs 0 (the reference has C_m = rho_s C_s)")
+        self._worst, self._errors = {}, {}
+        K = p.leakoff_heat_permeability * np.eye(mesh.dim)
+        model = self.fracture_model(mesh, degree, heat=True, permeability=K)
+        inj, prod = self.wells_at()
+        rho_c = m.fluid_rho_c
+        self.wells = [wells.injector(inj, w.injection_rate, rho_c, w.injection_temperature + CELSIUS),
+                      wells.rate_producer(prod, (1 - p.leakoff_fraction) * w.injection_rate, rho_c)]
+        model.points.extend(self.wells)
+        T0, Ti = w.initial_temperature + CELSIUS, w.injection_temperature + CELSIUS
+        pW, dp = w.initial_pressure, self.overpressure()
+        W = p.leakoff_heat_width
+        bcs = [Dirichlet("Tm", "far", lambda x, t: np.full(len(x), T0)),
+               Dirichlet("pm", "far", lambda x, t: np.full(len(x), pW))]
+        sp, sT = FieldScale(dp, pW), FieldScale(abs(T0 - Ti), T0)
+        scales = {"pf": sp, "pm": FieldScale(sp.scale, sp.offset), "Tf": sT, "Tm": FieldScale(sT.scale, sT.offset)}
+        steady = lambda x: pW + dp * (1 - np.abs(x[:, 1] - W) / W)  # noqa: E731
+        init = {"pf": steady, "pm": steady, "Tf": lambda x: np.full(len(x), T0), "Tm": lambda x: np.full(len(x), T0)}
+        return model, bcs, scales, init
+
+    def monitors(self, problem, t, X=None):
+        w = self[Wells]
+        inj, prod = self.wells_at()
+        out = {"injection_pressure": problem.point_value("pf", inj, X, t),
+               "production_temperature": problem.point_value("Tf", prod, X, t) - CELSIUS,
+               "production_rate": self.wells[1].residual({"pf": 0.0, "Tf": 0.0}, t)["pf"]}
+        out.update(self.balance_monitors(problem, t, X))
+        rl = self._balance.last_residual
+        out["leakoff_rate"] = -problem.reaction(rl, ("pm",), ("far",)) if rl is not None else 0.0
+        ex = self.exact_outlet(t)
+        out["outlet_error"] = abs(out["production_temperature"] - ex) / abs(w.initial_temperature -
+                                                                             w.injection_temperature)
+        for th in self.hit_times():
+            if abs(t - th) <= 1e-9 * th:
+                self._errors[th] = out["outlet_error"]
+        return out
+
+    def report(self, problem, t):
+        err = {f"outlet_rel_t{th:g}": e for th, e in sorted(self._errors.items())}
+        err["outlet_max_rel"] = max(self._errors.values()) if self._errors else None
+        return {"error": err, "balance_max": self._worst}

@@ -1,0 +1,41 @@
+"""Analytical reference solutions that need more than a closed form.
+
+``talbot``: numerical inverse Laplace transform (fixed Talbot contour,
+Abate & Valko 2004), vectorised over the contour nodes.
+``leakoff_outlet_temperature``: verification.md section 2, fracture heat
+transport with a uniform leakoff fraction m (matrix advection on or off).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def talbot(F, t: float, M: int = 32) -> float:
+    """f(t) from its Laplace transform F(s) (F vectorised over complex s)."""
+    r = 2.0 * M / (5.0 * t)
+    theta = np.arange(1, M) * np.pi / M
+    cot = 1.0 / np.tan(theta)
+    s = r * theta * (cot + 1j)
+    sigma = theta + (theta * cot - 1.0) * cot
+    terms = np.exp(t * s) * F(s) * (1.0 + 1j * sigma)
+    return float(r / M * (0.5 * np.real(F(np.array([r + 0j]))[0] * np.exp(r * t)) + np.sum(np.real(terms))))
+
+
+def leakoff_outlet_temperature(x, t, *, q0, m, L, fluid_rho_c, rock_rho_c, rock_conductivity, T0, Tinj,
+                               advection=True):
+    """Fracture temperature at x (verification.md section 2): leakoff velocity
+    v_L = m q0 / (2 L) through each face, matrix heat capacity C_m = rock_rho_c.
+
+    Laplace domain: r(s) = [P - sqrt(P^2 + 4 lambda C_m s)] / (2 lambda), P = rho_f c_f v_L,
+    theta_f = (Tinj - T0)/s (1 - m x/L)^(-lambda r / (rho_f c_f v_L)).
+    Without matrix advection P = 0 (then the closed form with x_eff holds)."""
+    if t <= 0:
+        return T0
+    vL = m * q0 / (2 * L)
+    P = fluid_rho_c * vL if advection else 0.0
+    lam, Cm = rock_conductivity, rock_rho_c
+
+    def F(s):
+        r = (P - np.sqrt(P * P + 4 * lam * Cm * s)) / (2 * lam)
+        return (Tinj - T0) / s * np.exp(-lam * r / (fluid_rho_c * vL) * np.log(1 - m * x / L))
+    return T0 + talbot(F, t)

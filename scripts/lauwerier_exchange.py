@@ -1,0 +1,71 @@
+"""``lauwerier`` with the three wall heat-exchange modes: equilibrium (Tm = Tf
+on the walls, the analytical solution's assumption), nusselt (hw = 7.54
+lambda_f / (2a)) and a given hw; reports each run's error against Lauwerier
+and its production-temperature difference from the equilibrium run.
+
+    python scripts/lauwerier_exchange.py [--out benchmarks/results/lauwerier_exchange] [--hw 100] [-- OPTIONS]
+
+Reads only the runs' summary.json / history.csv; writes exchange.csv and exchange.md."""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "lauwerier_exchange"))
+    ap.add_argument("--hw", default="100")
+    ap.add_argument("extra", nargs="*")
+    a = ap.parse_args()
+    modes = ["equilibrium", "nusselt", a.hw]
+    hist, summ = {}, {}
+    for m in modes:
+        d = os.path.join(a.out, f"runs/{m}")
+        cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", d, "-thm_quiet",
+               "-thm_fracture_heat_exchange", m, *a.extra]
+        p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+        if p.returncode:
+            sys.exit(p.stdout + p.stderr)
+        rows = list(csv.DictReader(open(os.path.join(d, "history.csv"))))[1:]
+        hist[m] = (np.array([float(r["time"]) for r in rows]),
+                   np.array([float(r["production_temperature"]) for r in rows]))
+        summ[m] = json.load(open(os.path.join(d, "summary.json")))
+    t0, T0 = hist["equilibrium"]
+    out = []
+    for m in modes:
+        t, T = hist[m]
+        dT = np.interp(t0, t, T) - T0
+        sel = t0 >= 1e6
+        e = summ[m]["error"]
+        out.append({"exchange": m, "outlet_error_vs_lauwerier_K": round(80 * e["outlet_max_rel_t_ge_1e6"], 4),
+                    "max_dT_prod_vs_equilibrium_K_t_ge_1e6": round(float(np.abs(dT[sel]).max()), 4),
+                    "dT_prod_vs_equilibrium_K_at_1e8": round(float(dT[-1]), 4),
+                    "energy_balance_max": summ[m]["balance_max"]["energy_balance"],
+                    "wall_s": round(summ[m]["wall_time"]["total"], 1)})
+    os.makedirs(a.out, exist_ok=True)
+    with open(os.path.join(a.out, "exchange.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(out[0]))
+        w.writeheader()
+        w.writerows(out)
+    lines = ["| exchange | outlet error vs Lauwerier, t >= 1e6 s (K) | max |T_prod - T_prod(equilibrium)|, "
+             "t >= 1e6 s (K) | at 1e8 s (K) | energy balance | wall (s) |", "|---|---|---|---|---|---|"]
+    for r in out:
+        lines.append(f"| {r['exchange']} | {r['outlet_error_vs_lauwerier_K']} | "
+                     f"{r['max_dT_prod_vs_equilibrium_K_t_ge_1e6']} | {r['dT_prod_vs_equilibrium_K_at_1e8']} | "
+                     f"{r['energy_balance_max']:.1e} | {r['wall_s']} |")
+    with open(os.path.join(a.out, "exchange.md"), "w") as f:
+        f.write("# lauwerier: wall heat-exchange modes\n\n" + "\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

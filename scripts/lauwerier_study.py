@@ -1,0 +1,129 @@
+"""Error against run time for the ``lauwerier`` scene (P1 and P2, several
+mesh/time-step resolutions): CSV, a work-precision PNG and a markdown table.
+
+    python scripts/lauwerier_study.py [--out benchmarks/results/lauwerier] [--levels 0,1,2,3,4]
+                                      [--schemes beuler,bdf2] [--jobs 2] [--plot-only]
+
+Each run is ``python -m petthm lauwerier`` with the options of its level;
+the study reads only the runs' summary.json/history.csv files.  The outlet
+error is max |T_out - T_Lauwerier| over t >= 1e6 s (kelvin), the profile
+errors are the max over the fracture at 1e7 and 1e8 s (fraction of T0 - Tinj);
+the wall time is the run's total wall time (one run at a time per core).
+``bdf2`` runs the same levels with PETSc's variable-step BDF2 (-ts_type bdf
+-ts_bdf_order 2) instead of backward Euler (the default), to separate the
+time-discretisation error from the spatial one."""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DT_RANGE = 80.0           # T0 - Tinj of the default scene (K)
+
+#: level -> (fracture mesh size m, far mesh size m, dt growth, dt_max s)
+LEVELS = {0: (4.0, 20.0, 1.10, 4e6), 1: (2.0, 15.0, 1.07, 2e6), 2: (1.0, 10.0, 1.05, 1e6),
+          3: (0.5, 10.0, 1.03, 5e5), 4: (0.25, 8.0, 1.02, 2.5e5)}
+
+
+def run_one(out, degree, level, scheme="beuler"):
+    fs, ms, g, dtmax = LEVELS[level]
+    d = os.path.join(out, f"P{degree}_L{level}" + ("" if scheme == "beuler" else f"_{scheme}"))
+    cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", d, "-thm_quiet",
+           "-thm_fe_degree", str(degree), "-thm_lauwerier_fracture_size", str(fs), "-thm_mesh_size", str(ms),
+           "-thm_dt_growth", str(g), "-thm_dt_max", str(dtmax)]
+    if scheme == "bdf2":
+        cmd += ["-ts_type", "bdf", "-ts_bdf_order", "2"]
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")   # one core per run
+    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
+    if p.returncode:
+        print(p.stdout, p.stderr, file=sys.stderr)
+        raise SystemExit(f"run P{degree} level {level} failed")
+    s = json.load(open(os.path.join(d, "summary.json")))
+    e = s["error"]
+    row = {"scheme": scheme, "degree": degree, "level": level, "fracture_size": fs, "mesh_size": ms, "dt_growth": g,
+           "dt_max": dtmax, "cells": s["cells"], "dofs": sum(s["dofs"].values()), "steps": s["steps"],
+           "wall_s": round(s["wall_time"]["total"], 2),
+           "outlet_error_K": e["outlet_max_rel_t_ge_1e6"] * DT_RANGE,
+           "profile_1e7": e["profile_max_rel_t1e+07"], "profile_1e8": e["profile_max_rel_t1e+08"],
+           "energy_balance_max": s["balance_max"]["energy_balance"]}
+    print(f"{scheme} P{degree} level {level}: {row['wall_s']} s, outlet error {row['outlet_error_K']:.3f} K", flush=True)
+    return row
+
+
+def plot(rows, out):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for scheme, ls in (("beuler", "-"), ("bdf2", "--")):
+      for deg, mk in ((1, "o"), (2, "s")):
+        r = sorted((x for x in rows if int(x["degree"]) == deg and x.get("scheme", "beuler") == scheme),
+                   key=lambda x: float(x["wall_s"]))
+        if not r:
+            continue
+        ax.loglog([float(x["wall_s"]) for x in r], [float(x["outlet_error_K"]) for x in r], mk + ls,
+                  label=f"P{deg} {'backward Euler' if scheme == 'beuler' else 'BDF2'}")
+        for x in r:
+            ax.annotate(f"L{x['level']}", (float(x["wall_s"]), float(x["outlet_error_K"])), fontsize=7)
+    ax.axhline(0.1, color="gray", ls=":", label="0.1 K")
+    ax.set_xlabel("wall time (s, 1 rank)")
+    ax.set_ylabel("max outlet error for t >= 1e6 s (K)")
+    ax.set_title("lauwerier: error against run time")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "lauwerier_work_precision.png"), dpi=120)
+
+
+def table(rows) -> str:
+    lines = ["| time | P | level | fracture h (m) | dt growth / max (s) | cells | dofs | steps | wall (s) | "
+             "outlet error (K) | profile 1e7 | profile 1e8 | energy balance |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for x in sorted(rows, key=lambda x: (x.get("scheme", "beuler"), int(x["degree"]), int(x["level"]))):
+        bal = float(x["energy_balance_max"])
+        lines.append(f"| {x.get('scheme', 'beuler')} | {x['degree']} | {x['level']} | {x['fracture_size']} | {x['dt_growth']} / "
+                     f"{float(x['dt_max']):.2g} | {x['cells']} | {x['dofs']} | {x['steps']} | {x['wall_s']} | "
+                     f"{float(x['outlet_error_K']):.3f} | {float(x['profile_1e7']):.2e} | "
+                     f"{float(x['profile_1e8']):.2e} | {'n/a' if bal != bal else f'{bal:.1e}'} |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "lauwerier"))
+    ap.add_argument("--levels", default="0,1,2,3,4")
+    ap.add_argument("--degrees", default="1,2")
+    ap.add_argument("--schemes", default="beuler,bdf2")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--plot-only", action="store_true")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    path = os.path.join(a.out, "lauwerier_study.csv")
+    if not a.plot_only:
+        cases = [(d, lv, sc) for sc in a.schemes.split(",") for d in map(int, a.degrees.split(","))
+                 for lv in map(int, a.levels.split(","))]
+        with ThreadPoolExecutor(a.jobs) as ex:
+            rows = list(ex.map(lambda c: run_one(os.path.join(a.out, "runs"), *c), cases))
+        if os.path.exists(path):          # keep rows of other schemes/levels from earlier runs
+            done = {(r["scheme"], int(r["degree"]), int(r["level"])) for r in rows}
+            rows += [r for r in csv.DictReader(open(path))
+                     if (r.get("scheme", "beuler"), int(r["degree"]), int(r["level"])) not in done]
+        with open(path, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows({**r, "scheme": r.get("scheme") or "beuler"} for r in rows)
+    rows = list(csv.DictReader(open(path)))
+    plot(rows, a.out)
+    md = table(rows)
+    with open(os.path.join(a.out, "lauwerier_study.md"), "w") as f:
+        f.write("# lauwerier: error against run time\n\n" + md + "\n")
+    print(md)
+
+
+if __name__ == "__main__":
+    main()
