@@ -16,6 +16,7 @@ import subprocess
 import sys
 
 import numpy as np
+from study_tables import markdown, write_csv, write_markdown
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -52,19 +53,14 @@ def main():
                     "energy_balance_max": summ[m]["balance_max"]["energy_balance"],
                     "wall_s": round(summ[m]["wall_time"]["total"], 1)})
     os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(a.out, "exchange.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(out[0]))
-        w.writeheader()
-        w.writerows(out)
-    lines = ["| exchange | outlet error vs Lauwerier, t >= 1e6 s (K) | max |T_prod - T_prod(equilibrium)|, "
-             "t >= 1e6 s (K) | at 1e8 s (K) | energy balance | wall (s) |", "|---|---|---|---|---|---|"]
-    for r in out:
-        lines.append(f"| {r['exchange']} | {r['outlet_error_vs_lauwerier_K']} | "
-                     f"{r['max_dT_prod_vs_equilibrium_K_t_ge_1e6']} | {r['dT_prod_vs_equilibrium_K_at_1e8']} | "
-                     f"{r['energy_balance_max']:.1e} | {r['wall_s']} |")
-    with open(os.path.join(a.out, "exchange.md"), "w") as f:
-        f.write("# lauwerier: wall heat-exchange modes\n\n" + "\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_csv(os.path.join(a.out, "exchange.csv"), out)
+    md = markdown([("exchange", "exchange", ""), ("outlet error vs Lauwerier, t >= 1e6 s (K)",
+                    "outlet_error_vs_lauwerier_K", ""),
+                   ("max abs T_prod - T_prod(equilibrium), t >= 1e6 s (K)", "max_dT_prod_vs_equilibrium_K_t_ge_1e6", ""),
+                   ("at 1e8 s (K)", "dT_prod_vs_equilibrium_K_at_1e8", ""), ("energy balance", "energy_balance_max", ".1e"),
+                   ("wall (s)", "wall_s", "")], out)
+    write_markdown(os.path.join(a.out, "exchange.md"), "lauwerier: wall heat-exchange modes", md)
+    print(md)
 
 
 if __name__ == "__main__":

@@ -10,8 +10,10 @@ error is max |T_out - T_Lauwerier| over t >= 1e6 s (kelvin), the profile
 errors are the max over the fracture at 1e7 and 1e8 s (fraction of T0 - Tinj);
 the wall time is the run's total wall time (one run at a time per core).
 ``bdf2`` runs the same levels with PETSc's variable-step BDF2 (-ts_type bdf
--ts_bdf_order 2) instead of backward Euler (the default), to separate the
-time-discretisation error from the spatial one."""
+-ts_bdf_order 2) instead of backward Euler (the default), and
+``beuler_fine_dt`` runs every level with the same small backward-Euler steps
+(+1 %/step, at most 1e5 s), to separate the time-discretisation error from
+the spatial one."""
 from __future__ import annotations
 
 import argparse
@@ -38,6 +40,8 @@ def run_one(out, degree, level, scheme="beuler"):
            "-thm_dt_growth", str(g), "-thm_dt_max", str(dtmax)]
     if scheme == "bdf2":
         cmd += ["-ts_type", "bdf", "-ts_bdf_order", "2"]
+    if scheme == "beuler_fine_dt":       # the same small steps at every level: spatial error only
+        cmd[-4:] = ["-thm_dt_growth", "1.01", "-thm_dt_max", "1e5"]
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")   # one core per run
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
     if p.returncode:
@@ -60,14 +64,15 @@ def plot(rows, out):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    for scheme, ls in (("beuler", "-"), ("bdf2", "--")):
+    for scheme, ls in (("beuler", "-"), ("bdf2", "--"), ("beuler_fine_dt", ":")):
       for deg, mk in ((1, "o"), (2, "s")):
         r = sorted((x for x in rows if int(x["degree"]) == deg and x.get("scheme", "beuler") == scheme),
                    key=lambda x: float(x["wall_s"]))
         if not r:
             continue
         ax.loglog([float(x["wall_s"]) for x in r], [float(x["outlet_error_K"]) for x in r], mk + ls,
-                  label=f"P{deg} {'backward Euler' if scheme == 'beuler' else 'BDF2'}")
+                  label=f"P{deg} " + {"beuler": "backward Euler", "bdf2": "BDF2",
+                                      "beuler_fine_dt": "BE, fixed small steps"}[scheme])
         for x in r:
             ax.annotate(f"L{x['level']}", (float(x["wall_s"]), float(x["outlet_error_K"])), fontsize=7)
     ax.axhline(0.1, color="gray", ls=":", label="0.1 K")

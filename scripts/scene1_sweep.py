@@ -23,6 +23,7 @@ import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from study_tables import markdown, write_csv, write_markdown
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CASES = [("k0", "0"), ("1d_1e-16", "0,1e-16"), ("1d_1e-15", "0,1e-15"), ("1d_1e-14", "0,1e-14"),
@@ -120,19 +121,14 @@ def main():
             todo = [c for c in CASES if c[0] in a.cases.split(",")]
             list(ex.map(lambda c: run(a.out, c[0], c[1], a.extra), todo))
     rows = plots(a.out)
-    with open(os.path.join(a.out, "scene1.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    lines = ["| case | -thm_rock_permeability | T_prod 1e8 s (degC) | T_prod 1e9 s | leakoff fraction 1e8 s | "
-             "mass bal. | energy bal. | Tf bound viol. | steps | wall (s) |", "|" + "---|" * 10]
-    for r in rows:
-        lines.append(f"| {r['case']} | {r['permeability']} | {r['T_prod_1e8']} | {r['T_prod_1e9']} | "
-                     f"{r['leakoff_fraction_1e8']} | {r['mass_balance_max']:.1e} | {r['energy_balance_max']:.1e} | "
-                     f"{r['Tf_bounds_violation']:.1e} | {r['steps']} | {r['wall_s']} |")
-    with open(os.path.join(a.out, "scene1.md"), "w") as f:
-        f.write("# Scene 1 (rigid_fracture): permeability sweep\n\n" + "\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_csv(os.path.join(a.out, "scene1.csv"), rows)
+    md = markdown([("case", "case", ""), ("-thm_rock_permeability", "permeability", ""),
+                   ("T_prod 1e8 s (degC)", "T_prod_1e8", ""), ("T_prod 1e9 s", "T_prod_1e9", ""),
+                   ("leakoff fraction 1e8 s", "leakoff_fraction_1e8", ""), ("mass bal.", "mass_balance_max", ".1e"),
+                   ("energy bal.", "energy_balance_max", ".1e"), ("Tf bound viol.", "Tf_bounds_violation", ".1e"),
+                   ("steps", "steps", ""), ("wall (s)", "wall_s", "")], rows)
+    write_markdown(os.path.join(a.out, "scene1.md"), "Scene 1 (rigid_fracture): permeability sweep", md)
+    print(md)
 
 
 if __name__ == "__main__":
