@@ -141,7 +141,10 @@ class Run:
 
         st, t0 = self._stage("output")
         matrix_fields = [f for f in disc.fields if f.region == "matrix"]
+        fracture_fields = [f for f in disc.fields if f.region == "fracture"]
         writer = FieldWriter(disc, self.outdir, matrix_fields[0].degree) if matrix_fields else None
+        fwriter = FieldWriter(disc, self.outdir, fracture_fields[0].degree, "fracture", "fracture") \
+            if fracture_fields else None
         columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(scene.history_columns)
         history = History(os.path.join(self.outdir, "history.csv"), columns, comm.rank)
         self._pop("output", st, t0)
@@ -150,10 +153,10 @@ class Run:
         state = {"its": (0, 0), "wall": time.perf_counter(), "last_t": 0.0}
 
         def write_fields(t):
-            if writer is None:
-                return
             s, t1 = self._stage("output")
-            writer.write(t - 0.0, {f.name: self._si_out(problem, f.name, t) for f in matrix_fields})
+            for w, fields in ((writer, matrix_fields), (fwriter, fracture_fields)):
+                if w is not None:
+                    w.write(t, {f.name: self._si_out(problem, f.name, t) for f in fields})
             self._pop("output", s, t1)
 
         def monitor(step, t, X):

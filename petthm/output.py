@@ -17,7 +17,8 @@ import numpy as np
 
 from .fields import Discretisation, FieldSpec
 
-TOPOLOGY = {(2, 1): ("Triangle", 3), (2, 2): ("Triangle_6", 6),
+TOPOLOGY = {(1, 1): ("Polyline", 2), (1, 2): ("Edge_3", 3),
+            (2, 1): ("Triangle", 3), (2, 2): ("Triangle_6", 6),
             (3, 1): ("Tetrahedron", 4), (3, 2): ("Tetrahedron_10", 10)}
 
 
@@ -57,19 +58,23 @@ def write_summary(path: str, summary: dict, rank: int) -> None:
 
 
 class FieldWriter:
-    """Time series of nodal fields on the matrix mesh (one degree for all)."""
+    """Time series of nodal fields on the matrix mesh, or (``region="fracture"``)
+    on the fracture surface (the - faces), one degree for all."""
 
-    def __init__(self, disc: Discretisation, directory: str, degree: int, stem: str = "fields"):
+    def __init__(self, disc: Discretisation, directory: str, degree: int, stem: str = "fields",
+                 region: str = "matrix"):
         mesh = disc.mesh
         self.comm = mesh.dm.comm.tompi4py()
         self.rank = self.comm.rank
         self.dim = mesh.dim
+        self.rdim = mesh.dim if region == "matrix" else mesh.dim - 1
         self.degree = degree
         self.h5path = os.path.join(directory, stem + ".h5")
         self.xdmfpath = os.path.join(directory, stem + ".xdmf")
         self.h5name = stem + ".h5"
         dmo = mesh.dm.clone()
-        nodes = Discretisation(mesh, [FieldSpec("node", 1, degree)], dm=dmo)
+        regions = {} if region == "matrix" else {region: disc.regions[region]}
+        nodes = Discretisation(mesh, [FieldSpec("node", 1, degree, region)], dm=dmo, regions=regions)
         gid = nodes.global_index
         self.local_gid = gid[nodes.field_local_dofs("node")[:, 0]]
         conn = gid[nodes.elem_dofs["node"]]
@@ -117,13 +122,14 @@ class FieldWriter:
             self._steps.append((t, entries))
 
     def _write_xdmf(self) -> None:
-        topo, npc = TOPOLOGY[(self.dim, self.degree)]
+        topo, npc = TOPOLOGY[(self.rdim, self.degree)]
+        per = f' NodesPerElement="{npc}"' if topo == "Polyline" else ""
         geo = "XY" if self.dim == 2 else "XYZ"
         out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0">', "<Domain>",
                '<Grid Name="TimeSeries" GridType="Collection" CollectionType="Temporal">']
         for k, (t, entries) in enumerate(self._steps):
             out += [f'<Grid Name="step{k}" GridType="Uniform">', f'<Time Value="{t!r}"/>',
-                    f'<Topology TopologyType="{topo}" NumberOfElements="{self.ncells}">',
+                    f'<Topology TopologyType="{topo}" NumberOfElements="{self.ncells}"{per}>',
                     f'<DataItem Dimensions="{self.ncells} {npc}" NumberType="Int" Precision="8" '
                     f'Format="HDF">{self.h5name}:/mesh/topology</DataItem>', "</Topology>",
                     f'<Geometry GeometryType="{geo}">',

@@ -15,7 +15,7 @@ def _cli(*args):
 def test_help_lists_scenes():
     p = _cli("-help")
     assert p.returncode == 0
-    for name in ("heat_mms", "heat_erfc", "heat_advection"):
+    for name in ("heat_mms", "heat_erfc", "heat_advection", "lauwerier", "rigid_fracture", "leakoff_heat"):
         assert name in p.stdout
 
 
@@ -64,3 +64,16 @@ def test_missing_options_file_is_an_error(tmp_path):
 def test_unknown_scene_is_an_error(tmp_path):
     proc, _ = run_petthm("heat_nope", tmp_path, check=False)
     assert "unknown scene 'heat_nope'" in _one_line_error(proc)
+
+
+@pytest.mark.parametrize("opts,words", [
+    (("-thm_fluid_viscosity", "foo"), ("-thm_fluid_viscosity", "water")),
+    (("-thm_fracture_heat_exchange", "-3"), ("-thm_fracture_heat_exchange", "nusselt")),
+    (("-thm_fracture_heat_exchange", "nusselt"), ("-thm_fracture_heat_exchange", "permeable")),
+    (("-thm_rock_permeability", "1,2,3"), ("-thm_rock_permeability", "1 or 2 values")),
+])
+def test_bad_fracture_input_is_a_one_line_error(tmp_path, opts, words):
+    proc, _ = run_petthm("rigid_fracture", tmp_path, *opts, "-thm_mesh_size", 60,
+                         "-thm_scene1_fracture_size", 10, check=False)
+    msg = _one_line_error(proc)
+    assert all(w in msg for w in words), msg

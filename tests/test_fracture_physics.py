@@ -101,6 +101,12 @@ def test_lauwerier_outlet_and_profile(tmp_path):
     assert e["profile_max_rel_t1e+07"] <= 1e-2 and e["profile_max_rel_t1e+08"] <= 1e-2
     assert b["Tf_bounds_violation"] <= 1e-2
     assert b["mass_balance"] <= 1e-6 and b["energy_balance"] <= 1e-6
+    import meshio                                   # fracture fields for ParaView
+    with meshio.xdmf.TimeSeriesReader(str(tmp_path / "fracture.xdmf")) as r:
+        pts, cells = r.read_points_cells()
+        _, pd, _ = r.read_data(r.num_steps - 1)
+    assert cells[0].type == "line3" and len(pts) == s["dofs"]["Tf"]
+    assert 20.0 - 0.8 <= pd["Tf"].min() and pd["Tf"].max() <= 100.0 + 0.8
 
 
 @pytest.mark.slow
