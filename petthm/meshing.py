@@ -105,6 +105,8 @@ def box(path: str, lengths: Sequence[float], size: float, grading: Grading | Non
 
 #: physical-group tag of fracture ``i`` (PETSc reads it into the "Face Sets" label)
 FRACTURE_TAG0 = 10
+#: physical groups: the outer boundary (facets), fracture i's tip (codimension 2), well i (points)
+BOUNDARY_TAG, TIP_TAG0, WELL_TAG0 = 2, 200, 100
 
 
 @dataclass(frozen=True)
@@ -148,8 +150,10 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     """Box (or rectangle) ``origin + [0, lengths]`` with embedded fractures; the
     mesh conforms to them.
 
-    Physical groups: the domain (cells, tag 1) and fracture ``i`` (facets, tag
-    ``FRACTURE_TAG0 + i``).  With ``grading_distance`` > 0 the size grows
+    Physical groups: the domain (cells, tag 1), its outer boundary (facets,
+    ``BOUNDARY_TAG``), fracture ``i`` (facets, ``FRACTURE_TAG0 + i``), its tip
+    (the fracture's edges, or end points in 2D, inside the domain,
+    ``TIP_TAG0 + i``) and well ``i`` (a point, ``WELL_TAG0 + i``).  With ``grading_distance`` > 0 the size grows
     linearly from each fracture's ``size`` to ``size`` over that distance.
     ``wells``: points (on a fracture) that become mesh vertices, with mesh
     size ``well_size`` (default: the fracture's) growing away from them.
@@ -165,9 +169,18 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     occ.synchronize()
     cells = [t for (d, t) in mapping[0] if d == dim]
     gmsh.model.addPhysicalGroup(dim, cells, 1)
+    outer = gmsh.model.getBoundary([(dim, c) for c in cells], combined=True, oriented=False)
+    gmsh.model.addPhysicalGroup(dim - 1, [t for (_, t) in outer], BOUNDARY_TAG)
+    on_outer = {t for (_, t) in gmsh.model.getBoundary(outer, combined=False, oriented=False)}
     for i, m in enumerate(mapping[1:1 + len(fractures)]):
         ents = [t for (d, t) in m if d == dim - 1]
         gmsh.model.addPhysicalGroup(dim - 1, ents, FRACTURE_TAG0 + i)
+        rim = gmsh.model.getBoundary([(dim - 1, e) for e in ents], combined=True, oriented=False)
+        tip = [t for (_, t) in rim if t not in on_outer]
+        if tip:
+            gmsh.model.addPhysicalGroup(dim - 2, tip, TIP_TAG0 + i)
+    for i, m in enumerate(mapping[1 + len(fractures):]):
+        gmsh.model.addPhysicalGroup(0, [t for (d, t) in m if d == 0], WELL_TAG0 + i)
     fine = [f.size or size for f in fractures] + ([well_size] if wells and well_size else [])
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     gmsh.option.setNumber("Mesh.MeshSizeMin", min(fine))
