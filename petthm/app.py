@@ -110,7 +110,7 @@ class Run:
         model, dirichlet, scales, initial = scene.build(mesh, run.fe_degree)
         bcs = {}
         for d in dirichlet:
-            bcs.setdefault(d.field, []).append(d.boundary)
+            bcs.setdefault(d.field, []).append(d.entry())
         regions = {"fracture": mesh.fracture} if scene.fractured else {}
         disc = Discretisation(mesh, model.fields, bcs, regions=regions, ties=model.ties)
         problem = Problem(disc, model, scales, dirichlet, run.quadrature_degree or None)

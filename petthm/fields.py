@@ -37,6 +37,15 @@ class DirichletDofs:
     dofs: np.ndarray        # (n, ncomp) local dof indices
     coords: np.ndarray      # (n, dim)
     source: str = ""        # tied dofs: the fracture field whose Dirichlet data they take
+    components: tuple | None = None   # constrained components (None: all)
+
+
+def boundary_entry(entry) -> tuple[str, tuple | None]:
+    """A Dirichlet entry of ``Discretisation``: a boundary name, or (name, components)."""
+    if isinstance(entry, str):
+        return entry, None
+    name, comps = entry
+    return name, (None if comps is None else tuple(int(c) for c in comps))
 
 
 @dataclass
@@ -70,23 +79,25 @@ class Discretisation:
         dm = self.dm
         self.depths = {f.name: (0, 1) if f.degree == 2 else (0,) for f in self.fields}
         self.support = {f.name: self._support_points(f) for f in self.fields}
-        bc_points = {f.name: self._bc_points(dirichlet.get(f.name, ()), f) for f in self.fields}
+        dirichlet = {k: [boundary_entry(e) for e in v] for k, v in dirichlet.items()}
+        pstart, pend = dm.getChart()
+        bc_mask = {f.name: self._bc_mask(dirichlet.get(f.name, ()), f, pstart, pend) for f in self.fields}
         self.tied_points = {f: self._tied_points(f) for f in self.ties_spec}
         for f, pts in self.tied_points.items():
-            bc_points[f] = np.union1d(bc_points[f], pts).astype(compat.INT)
-        self.section = self._create_section(bc_points)
+            bc_mask[f][pts - pstart] = True
+        self.section = self._create_section(bc_mask, pstart)
         compat.set_local_section(dm, self.section)
         self.nlocal = self.section.getStorageSize()
         self.offsets = self._point_offsets()
         self.elem_dofs = {f.name: self._element_dofs(f) for f in self.fields}
-        self.dirichlet = [self._dirichlet(f, b) for f in self.fields for b in dirichlet.get(f.name, ())]
+        self.dirichlet = [self._dirichlet(f, b, c) for f in self.fields for b, c in dirichlet.get(f.name, ())]
         self.global_index = compat.lgmap_indices(dm)
         if self.global_index.size != self.nlocal:
             raise RuntimeError("local-to-global map does not match the local section")
         self._trace_cache = {}
         self.ties = []
         for f, g in self.ties_spec.items():
-            self._tie(f, g, dirichlet.get(g, ()))
+            self._tie(f, g, [b for b, _ in dirichlet.get(g, ())])
 
     # -- ties (strong continuity of a matrix field with a fracture field) --------
     def _tied_points(self, f: str) -> np.ndarray:
@@ -147,12 +158,16 @@ class Discretisation:
             pts = np.intersect1d(pts, on)
         return pts.astype(compat.INT)
 
-    def _bc_points(self, boundaries, f: FieldSpec) -> np.ndarray:
-        pts = [self.mesh.label_points(b, d) for b in boundaries for d in self.depths[f.name]]
-        pts = np.unique(np.concatenate(pts)).astype(compat.INT) if pts else np.zeros(0, compat.INT)
-        return np.intersect1d(pts, self.support[f.name]).astype(compat.INT)
+    def _bc_mask(self, entries, f: FieldSpec, pstart: int, pend: int) -> np.ndarray:
+        """(points, ncomp) mask of the constrained components of ``f``."""
+        mask = np.zeros((pend - pstart, f.ncomp), dtype=bool)
+        for b, comps in entries:
+            pts = np.concatenate([self.mesh.label_points(b, d) for d in self.depths[f.name]])
+            pts = np.intersect1d(pts, self.support[f.name]).astype(compat.INT)
+            mask[np.ix_(pts - pstart, np.arange(f.ncomp) if comps is None else np.asarray(comps))] = True
+        return mask
 
-    def _create_section(self, bc_points) -> PETSc.Section:
+    def _create_section(self, bc_mask, pstart) -> PETSc.Section:
         dim = self.mesh.dim
         num_comp = [f.ncomp for f in self.fields]
         num_dof = np.zeros((len(self.fields), dim + 1), dtype=compat.INT)
@@ -160,12 +175,18 @@ class Discretisation:
             for d in self.depths[f.name]:
                 num_dof[i, d] = f.ncomp
         bc_field, bc_comps, bc_is = [], [], []
-        for i, f in enumerate(self.fields):
-            if bc_points[f.name].size:
+        for i, f in enumerate(self.fields):        # one entry per distinct set of constrained components
+            mask = bc_mask[f.name]
+            on = np.flatnonzero(mask.any(axis=1))
+            if not on.size:
+                continue
+            patterns, which = np.unique(mask[on], axis=0, return_inverse=True)
+            for k, pat in enumerate(patterns):
                 bc_field.append(i)
-                bc_comps.append(PETSc.IS().createGeneral(np.arange(f.ncomp, dtype=compat.INT),
+                bc_comps.append(PETSc.IS().createGeneral(np.flatnonzero(pat).astype(compat.INT),
                                                          comm=PETSc.COMM_SELF))
-                bc_is.append(PETSc.IS().createGeneral(bc_points[f.name], comm=PETSc.COMM_SELF))
+                bc_is.append(PETSc.IS().createGeneral((on[which.ravel() == k] + pstart).astype(compat.INT),
+                                                      comm=PETSc.COMM_SELF))
         self.dm.setNumFields(len(self.fields))
         labels = self._support_labels()
         sec = compat.create_section(self.dm, labels, num_comp, num_dof.ravel(),
@@ -229,12 +250,13 @@ class Discretisation:
         base = self.offsets[f.name][points - self.pstart]                # (nc, nb)
         return (base[:, :, None] + np.arange(f.ncomp)).reshape(len(base), base.shape[1] * f.ncomp).astype(compat.INT)
 
-    def _dirichlet(self, f: FieldSpec, boundary: str) -> DirichletDofs:
+    def _dirichlet(self, f: FieldSpec, boundary: str, comps=None) -> DirichletDofs:
         pts = np.concatenate([self.mesh.label_points(boundary, d) for d in self.depths[f.name]])
         pts = np.intersect1d(pts, self.support[f.name])
         base = self.offsets[f.name][pts - self.pstart]
-        return DirichletDofs(f.name, boundary, base[:, None] + np.arange(f.ncomp),
-                             self.mesh.point_coordinates(pts))
+        cols = np.arange(f.ncomp) if comps is None else np.asarray(comps)
+        return DirichletDofs(f.name, boundary, base[:, None] + cols, self.mesh.point_coordinates(pts),
+                             components=comps)
 
     # -- element dofs per region (traces of matrix fields on the fracture) ------
     def region_dofs(self, region: str, name: str) -> np.ndarray:

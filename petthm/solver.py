@@ -75,6 +75,11 @@ class Dirichlet:
     boundary: str
     value: BoundaryFunction
     rate: BoundaryFunction | None = None   # d value / dt (default 0)
+    components: tuple | None = None        # constrained components of a vector field (None: all)
+
+    def entry(self):
+        """The boundary entry of ``fields.Discretisation``."""
+        return self.boundary if self.components is None else (self.boundary, self.components)
 
 
 @dataclass
@@ -104,10 +109,10 @@ class Problem:
         self.asm = self.assemblers[0]
         self.points = [_PointDofs(disc, pt) for pt in model.points]
         self._dirichlet = list(dirichlet)
-        byname = {(d.field, d.boundary): d for d in dirichlet}
+        byname = {(d.field, d.boundary, d.components): d for d in dirichlet}
         self._bc = []
         for dd in disc.dirichlet:
-            d = byname.get((dd.source or dd.field, dd.boundary))
+            d = byname.get((dd.source or dd.field, dd.boundary, dd.components))
             if d is not None:
                 self._bc.append((d, dd))
         self.X = self.dm.createGlobalVec()
