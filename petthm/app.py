@@ -140,11 +140,13 @@ class Run:
             f"residual / {rscales[k]:.3e}" for k in sizes))
 
         st, t0 = self._stage("output")
-        matrix_fields = [f for f in disc.fields if f.region == "matrix"]
-        fracture_fields = [f for f in disc.fields if f.region == "fracture"]
-        writer = FieldWriter(disc, self.outdir, matrix_fields[0].degree) if matrix_fields else None
-        fwriter = FieldWriter(disc, self.outdir, fracture_fields[0].degree, "fracture", "fracture") \
-            if fracture_fields else None
+        groups = {}                        # one writer per (region, degree): fields, fields_p1, fracture
+        for f in disc.fields:
+            groups.setdefault((f.region, f.degree), []).append(f)
+        top = {r: max(d for rr, d in groups if rr == r) for r, _ in groups}
+        writers = [(FieldWriter(disc, self.outdir, d, ("fields" if r == "matrix" else "fracture")
+                                + ("" if d == top[r] else f"_p{d}"), r), fields)
+                   for (r, d), fields in groups.items()]
         columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(scene.history_columns)
         history = History(os.path.join(self.outdir, "history.csv"), columns, comm.rank)
         self._pop("output", st, t0)
@@ -154,9 +156,8 @@ class Run:
 
         def write_fields(t):
             s, t1 = self._stage("output")
-            for w, fields in ((writer, matrix_fields), (fwriter, fracture_fields)):
-                if w is not None:
-                    w.write(t, {f.name: self._si_out(problem, f.name, t) for f in fields})
+            for w, fields in writers:
+                w.write(t, {f.name: self._si_out(problem, f.name, t) for f in fields})
             self._pop("output", s, t1)
 
         def monitor(step, t, X):

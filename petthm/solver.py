@@ -192,10 +192,11 @@ class Problem:
         sc = self.scales[name]
         return xl[self.disc.field_local_dofs(name)] * sc.scale + sc.offset
 
-    def point_value(self, name: str, point, X: PETSc.Vec | None = None, t: float = 0.0) -> float:
-        """SI value of a scalar field at the node nearest to ``point`` (all ranks)."""
+    def point_value(self, name: str, point, X: PETSc.Vec | None = None, t: float = 0.0,
+                    component: int = 0) -> float:
+        """SI value of a field's component at the node nearest to ``point`` (all ranks)."""
         from mpi4py import MPI
-        v = self.field_values(name, X, t)[:, 0]
+        v = self.field_values(name, X, t)[:, component]
         x = self.disc.field_node_coordinates(name)
         d = np.linalg.norm(x - np.asarray(point)[None, :x.shape[1]], axis=1) if len(v) else np.zeros(0)
         k = int(np.argmin(d)) if len(d) else 0

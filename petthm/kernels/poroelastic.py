@@ -1,0 +1,122 @@
+"""Thermo-poro-elastic deformation of the matrix (physics.md section 2) and the
+Biot term of the matrix flow equation (section 5).
+
+    -div sigma = F,   sigma = C : eps(u) - alpha (p - p0) I - K beta_s (T - T0) I
+
+(tension positive; the in-situ stress sigma0 is in equilibrium and left out:
+u is the displacement from the in-situ state).  Weak form:
+
+    int grad w : sigma - int w . F - int_N w . t = 0
+
+Flow: alpha d(div u)/dt is added to the matrix flow residual (the rest of
+section 5 is ``transport.Flow`` with storage S = 1/M = phi c_f + (alpha - phi)/K_s).
+In 2D the equations are those of plane strain (the same formulas with d = 2).
+The thermo-mechanical heating terms of section 6 are not included yet.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Optional
+
+import numpy as np
+
+from ..model import CellJacobian, CellResidual, FacetTerm
+
+
+@dataclass(frozen=True)
+class Elastic:
+    """Drained isotropic elasticity with Biot and thermal coupling."""
+    youngs_modulus: float
+    poisson_ratio: float
+    dim: int
+    u: str = "u"
+    p: Optional[str] = None           # pore pressure field (Biot coupling)
+    biot: float = 0.0
+    p_ref: float = 0.0
+    T: Optional[str] = None           # temperature field (thermal strain)
+    thermal_expansion: float = 0.0    # volumetric beta_s
+    T_ref: float = 0.0
+    region: str = "matrix"
+
+    @property
+    def shear(self) -> float:
+        return self.youngs_modulus / (2 * (1 + self.poisson_ratio))
+
+    @property
+    def lame(self) -> float:
+        E, nu = self.youngs_modulus, self.poisson_ratio
+        return E * nu / ((1 + nu) * (1 - 2 * nu))
+
+    @property
+    def bulk(self) -> float:
+        return self.youngs_modulus / (3 * (1 - 2 * self.poisson_ratio))
+
+    def stiffness(self) -> np.ndarray:
+        """C[a, e, b, f] = lambda d_ae d_bf + G (d_ab d_ef + d_af d_eb)."""
+        I = np.eye(self.dim)
+        return self.lame * np.einsum("ae,bf->aebf", I, I) + self.shear * (
+            np.einsum("ab,ef->aebf", I, I) + np.einsum("af,eb->aebf", I, I))
+
+
+def stress(el: Elastic, ctx):
+    """sigma (nc, nq, d, d), tension positive."""
+    G = ctx.grad(el.u)
+    eps = 0.5 * (G + np.swapaxes(G, 2, 3))
+    iso = el.lame * np.trace(eps, axis1=2, axis2=3)
+    if el.p is not None and el.biot:
+        iso = iso - el.biot * (ctx.value(el.p)[..., 0] - el.p_ref)
+    if el.T is not None and el.thermal_expansion:
+        iso = iso - el.bulk * el.thermal_expansion * (ctx.value(el.T)[..., 0] - el.T_ref)
+    return 2 * el.shear * eps + iso[..., None, None] * np.eye(el.dim)
+
+
+def _g3_uu(el: Elastic, ctx):
+    return el.stiffness()[None, None]
+
+
+def _g2_coupling(coef: float, dim: int, ctx):
+    return (-coef * np.eye(dim))[None, None, :, :, None]
+
+
+def _biot_f0(el: Elastic, ctx):
+    """alpha d(div u)/dt in the flow equation."""
+    Gdot = _grad_dot(ctx, el.u)
+    return el.biot * np.trace(Gdot, axis1=2, axis2=3)[..., None]
+
+
+def _grad_dot(ctx, name):
+    """Gradient of the time derivative of a vector field (nc, nq, m, d)."""
+    key = ("gd", name)
+    if key not in ctx._cache:
+        from ..assembly import physical_gradient
+        tab = ctx._asm.tab(name)
+        X = ctx._nodal(name, dot=True)
+        nc, nq, r = X.shape[0], tab.phi.shape[0], ctx.Jinv.shape[1]
+        ctx._cache[key] = physical_gradient((tab.D @ X).reshape(nc, nq, r, -1), ctx.Jinv)
+    return ctx._cache[key]
+
+
+def _biot_g1(el: Elastic, ctx):
+    return (el.biot * ctx.shift * np.eye(el.dim))[None, None, None]
+
+
+def elastic_terms(el: Elastic) -> tuple[list, list]:
+    """Momentum balance of ``el.u`` and the Biot term of the flow equation."""
+    res = [CellResidual(el.u, None, partial(stress, el), region=el.region)]
+    jac = [CellJacobian(el.u, el.u, g3=partial(_g3_uu, el), region=el.region)]
+    if el.p is not None and el.biot:
+        jac.append(CellJacobian(el.u, el.p, g2=partial(_g2_coupling, el.biot, el.dim), region=el.region))
+        res.append(CellResidual(el.p, partial(_biot_f0, el), None, region=el.region))
+        jac.append(CellJacobian(el.p, el.u, g1=partial(_biot_g1, el), region=el.region))
+    if el.T is not None and el.thermal_expansion:
+        jac.append(CellJacobian(el.u, el.T, g2=partial(_g2_coupling, el.bulk * el.thermal_expansion, el.dim),
+                                region=el.region))
+    return res, jac
+
+
+def traction(u: str, boundary: str, t_of_x) -> FacetTerm:
+    """Prescribed traction t (Pa, vector) on a boundary part: residual -int w . t."""
+    def f0(ctx):
+        return -np.broadcast_to(t_of_x(ctx.x, ctx.t), ctx.shape + (ctx.dim,))
+    return FacetTerm(u, boundary, f0, None)

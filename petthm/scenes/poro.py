@@ -1,0 +1,186 @@
+"""Poroelastic verification scenes (issue 4; verification.md section 6).
+
+* ``terzaghi``: 1D consolidation of a column (plane strain, lateral and base
+  rollers, a load sigma0 on the drained top at t = 0+, impermeable base),
+  started from the undrained state and compared with the series solution.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import meshing
+from ..assembly import FieldScale
+from ..fields import FieldSpec
+from ..fluid import Viscosity
+from ..kernels import poroelastic as pe
+from ..kernels import transport as tr
+from ..model import Model
+from ..params import param
+from ..solver import Dirichlet
+from .base import Scene, TimeDefaults, register
+
+
+@dataclass(frozen=True)
+class PoroRock:
+    """Poroelastic rock and fluid (physics.md sections 2 and 5; verification.md rock set R)"""
+    rock_youngs_modulus: float = param(37.5e9, "Pa", "drained Young's modulus E", lo=0.0, lo_open=True)
+    rock_poisson_ratio: float = param(0.25, "-", "drained Poisson ratio nu", lo=0.0, hi=0.4999)
+    rock_biot_coefficient: float = param(0.8, "-", "Biot coefficient alpha", lo=0.0, hi=1.0)
+    rock_porosity: float = param(0.1, "-", "porosity phi", lo=0.0, hi=1.0)
+    rock_permeability: float = param(1e-14, "m2", "permeability k", lo=0.0, lo_open=True)
+    fluid_compressibility: float = param(4.5e-10, "1/Pa", "fluid compressibility c_f", lo=0.0)
+    fluid_viscosity: float = param(1e-3, "Pa s", "fluid viscosity mu", lo=0.0, lo_open=True)
+
+    @property
+    def K(self):
+        return self.rock_youngs_modulus / (3 * (1 - 2 * self.rock_poisson_ratio))
+
+    @property
+    def G(self):
+        return self.rock_youngs_modulus / (2 * (1 + self.rock_poisson_ratio))
+
+    @property
+    def storage(self):
+        """1/M = phi c_f + (alpha - phi)/K_s, K_s = K/(1 - alpha) (alpha = 1: K_s infinite)."""
+        a, phi = self.rock_biot_coefficient, self.rock_porosity
+        return phi * self.fluid_compressibility + (a - phi) * (1 - a) / self.K
+
+    @property
+    def M_d(self):
+        return self.K + 4 * self.G / 3
+
+    def consolidation(self):
+        """c = (k/mu) M M_d / (K_u + 4G/3), K_u = K + alpha^2 M."""
+        M = 1.0 / self.storage
+        Ku = self.K + self.rock_biot_coefficient ** 2 * M
+        return self.rock_permeability / self.fluid_viscosity * M * self.M_d / (Ku + 4 * self.G / 3)
+
+
+@dataclass(frozen=True)
+class TerzaghiParams:
+    """Terzaghi consolidation column (terzaghi)"""
+    terzaghi_height: float = param(10.0, "m", "column height L", lo=0.0, lo_open=True)
+    terzaghi_width: float = param(1.0, "m", "column width", lo=0.0, lo_open=True)
+    terzaghi_load: float = param(1e6, "Pa", "compressive load sigma0 on the top", lo=0.0, lo_open=True)
+    terzaghi_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2))
+
+
+def _terms(n=400):
+    return (2 * np.arange(n) + 1) * np.pi / 2
+
+
+@register
+class Terzaghi(Scene):
+    name = "terzaghi"
+    description = "1D consolidation (verification.md 6a): pressure and settlement vs the series solution"
+    parameter_sets = (PoroRock, TerzaghiParams)
+    time = TimeDefaults(final_time=1300.0, dt_initial=0.0648, dt_growth=1.05, dt_max=2.0, mesh_size=0.5)
+    history_columns = ("settlement", "settlement_exact", "p_base", "p_base_exact", "p_l2_rel")
+    TV = (0.01, 0.1, 0.5, 1.0)
+
+    def solver_defaults(self, comm):
+        """A sparse direct solve: GMRES + GAMG does not handle the u-p saddle point
+        (the field-split recipe comes with the contact work of issue 4)."""
+        from ..solver import direct_solver_defaults
+        return direct_solver_defaults(comm)
+
+    def boundaries(self):
+        p = self[TerzaghiParams]
+        return {"top": lambda x: np.isclose(x[:, 1], p.terzaghi_height),
+                "base": lambda x: np.isclose(x[:, 1], 0.0),
+                "sides": lambda x: np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], p.terzaghi_width)}
+
+    def generate_mesh(self, path, size):
+        p = self[TerzaghiParams]
+        return meshing.box(path, [p.terzaghi_width, p.terzaghi_height], size, structured=True)
+
+    # -- reference solution ----------------------------------------------------------
+    def t_c(self):
+        return self[TerzaghiParams].terzaghi_height ** 2 / self[PoroRock].consolidation()
+
+    def p0(self):
+        r, s0 = self[PoroRock], self[TerzaghiParams].terzaghi_load
+        M = 1.0 / r.storage
+        return r.rock_biot_coefficient * M * s0 / (r.M_d + r.rock_biot_coefficient ** 2 * M)
+
+    def exact_p(self, x, t):
+        L = self[TerzaghiParams].terzaghi_height
+        z = L - x[..., 1]
+        lam = _terms()
+        Tv = t / self.t_c()
+        e = np.exp(-lam ** 2 * Tv) * 2 / lam
+        return self.p0() * np.sum(np.sin(np.multiply.outer(z, lam) / L) * e, axis=-1)
+
+    def exact_grad_p(self, x, t):
+        L = self[TerzaghiParams].terzaghi_height
+        z = L - x[..., 1]
+        lam = _terms()
+        e = np.exp(-lam ** 2 * t / self.t_c()) * 2 / L
+        dpdz = self.p0() * np.sum(np.cos(np.multiply.outer(z, lam) / L) * e, axis=-1)
+        return np.stack([np.zeros_like(dpdz), -dpdz], axis=-1)
+
+    def exact_settlement(self, t):
+        r, p = self[PoroRock], self[TerzaghiParams]
+        M = 1.0 / r.storage
+        s0 = p.terzaghi_load * p.terzaghi_height / (r.M_d + r.rock_biot_coefficient ** 2 * M)
+        sinf = p.terzaghi_load * p.terzaghi_height / r.M_d
+        lam = _terms()
+        U = 1 - np.sum(2 / lam ** 2 * np.exp(-lam ** 2 * t / self.t_c()))
+        return s0 + (sinf - s0) * U
+
+    def hit_times(self):
+        return [tv * self.t_c() for tv in self.TV]
+
+    # -- model -------------------------------------------------------------------------
+    def build(self, mesh, degree):
+        r, p = self[PoroRock], self[TerzaghiParams]
+        d = mesh.dim
+        el = pe.Elastic(r.rock_youngs_modulus, r.rock_poisson_ratio, d, p="pm",
+                        biot=r.rock_biot_coefficient)
+        flow = tr.Flow("matrix", "pm", None, r.storage, r.rock_permeability * np.eye(d),
+                       Viscosity(r.fluid_viscosity))
+        res, jac = pe.elastic_terms(el)
+        fr, fj = tr.flow_terms(flow)
+        load = pe.traction("u", "top", lambda x, t: np.array([0.0, -p.terzaghi_load]))
+        model = Model([FieldSpec("u", d, degree), FieldSpec("pm", 1, p.terzaghi_pressure_degree)],
+                      res + fr, jac + fj, [load])
+        zero = lambda x, t: np.zeros(len(x))  # noqa: E731
+        bcs = [Dirichlet("u", "sides", zero, components=(0,)), Dirichlet("u", "base", zero, components=(1,)),
+               Dirichlet("pm", "top", zero)]
+        s_inf = p.terzaghi_load * p.terzaghi_height / r.M_d
+        scales = {"u": FieldScale(s_inf), "pm": FieldScale(self.p0())}
+        # undrained state at t = 0+: uniform p0 and uniform vertical strain
+        M = 1.0 / r.storage
+        eps = -p.terzaghi_load / (r.M_d + r.rock_biot_coefficient ** 2 * M)
+        init = {"u": lambda x: np.column_stack([np.zeros(len(x)), eps * x[:, 1]]),
+                "pm": lambda x: np.full(len(x), self.p0())}
+        self._errors = {}
+        return model, bcs, scales, init
+
+    def _settlement(self, problem, t, X=None):
+        L = self[TerzaghiParams].terzaghi_height
+        return -problem.point_value("u", (0.0, L), X, t, component=1)
+
+    def monitors(self, problem, t, X=None):
+        """Settlement and base pressure every step; the relative L2 error of pm at
+        the verification times T_v = c t / L^2 in ``TV`` (the series is costly)."""
+        out = {"settlement": self._settlement(problem, t, X), "settlement_exact": self.exact_settlement(t),
+               "p_base": problem.point_value("pm", (0.0, 0.0), X, t),
+               "p_base_exact": float(self.exact_p(np.array([[0.0, 0.0]]), t)[0]) if t > 0 else self.p0()}
+        for tv, th in zip(self.TV, self.hit_times()):
+            if abs(t - th) <= 1e-9 * th:
+                xl, _ = problem.local_arrays(X or problem.X, t)
+                e = problem.asm.error_norms(xl, "pm", self.exact_p, self.exact_grad_p, t)
+                out["p_l2_rel"] = e["l2_rel"]
+                self._errors[tv] = (e["l2_rel"], abs(out["settlement"] - out["settlement_exact"]) /
+                                    out["settlement_exact"])
+        return out
+
+    def report(self, problem, t):
+        err = {}
+        for tv, (ep, es) in sorted(self._errors.items()):
+            err[f"p_l2_rel_Tv{tv:g}"] = ep
+            err[f"settlement_rel_Tv{tv:g}"] = es
+        return {"error": err, "t_c": self.t_c(), "p0": self.p0()}
