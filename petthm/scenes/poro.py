@@ -52,10 +52,15 @@ class PoroRock:
         return self.K + 4 * self.G / 3
 
     def consolidation(self):
-        """c = (k/mu) M M_d / (K_u + 4G/3), K_u = K + alpha^2 M."""
-        M = 1.0 / self.storage
-        Ku = self.K + self.rock_biot_coefficient ** 2 * M
-        return self.rock_permeability / self.fluid_viscosity * M * self.M_d / (Ku + 4 * self.G / 3)
+        """c = (k/mu) M M_d / (K_u + 4G/3), K_u = K + alpha^2 M, written with S = 1/M
+        so that S = 0 (incompressible fluid and grains) is allowed."""
+        S, a = self.storage, self.rock_biot_coefficient
+        return self.rock_permeability / self.fluid_viscosity * self.M_d / (S * (self.K + 4 * self.G / 3) + a * a)
+
+    def undrained_factor(self):
+        """1 / (M_d + alpha^2 M) written with S: S / (S M_d + alpha^2)."""
+        S, a = self.storage, self.rock_biot_coefficient
+        return S / (S * self.M_d + a * a)
 
 
 @dataclass(frozen=True)
@@ -65,6 +70,9 @@ class TerzaghiParams:
     terzaghi_width: float = param(1.0, "m", "column width", lo=0.0, lo_open=True)
     terzaghi_load: float = param(1e6, "Pa", "compressive load sigma0 on the top", lo=0.0, lo_open=True)
     terzaghi_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2))
+    terzaghi_start: str = param("undrained", "-", "initial state: undrained (the t = 0+ solution) or rest "
+                                "(u = 0, p = 0; the load makes the first step undrained)",
+                                choices=("undrained", "rest"))
 
 
 def _terms(n=400):
@@ -77,7 +85,7 @@ class Terzaghi(Scene):
     description = "1D consolidation (verification.md 6a): pressure and settlement vs the series solution"
     parameter_sets = (PoroRock, TerzaghiParams)
     time = TimeDefaults(final_time=1300.0, dt_initial=0.0648, dt_growth=1.05, dt_max=2.0, mesh_size=0.5)
-    history_columns = ("settlement", "settlement_exact", "p_base", "p_base_exact", "p_l2_rel")
+    history_columns = ("settlement", "settlement_exact", "p_base", "p_base_exact", "p_l2_rel", "p_overshoot")
     TV = (0.01, 0.1, 0.5, 1.0)
 
     def solver_defaults(self, comm):
@@ -101,9 +109,10 @@ class Terzaghi(Scene):
         return self[TerzaghiParams].terzaghi_height ** 2 / self[PoroRock].consolidation()
 
     def p0(self):
+        """alpha M sigma0 / (M_d + alpha^2 M) = alpha sigma0 / (S M_d + alpha^2)."""
         r, s0 = self[PoroRock], self[TerzaghiParams].terzaghi_load
-        M = 1.0 / r.storage
-        return r.rock_biot_coefficient * M * s0 / (r.M_d + r.rock_biot_coefficient ** 2 * M)
+        a = r.rock_biot_coefficient
+        return a * s0 / (r.storage * r.M_d + a * a) if a > 0 else 0.0
 
     def exact_p(self, x, t):
         L = self[TerzaghiParams].terzaghi_height
@@ -123,8 +132,7 @@ class Terzaghi(Scene):
 
     def exact_settlement(self, t):
         r, p = self[PoroRock], self[TerzaghiParams]
-        M = 1.0 / r.storage
-        s0 = p.terzaghi_load * p.terzaghi_height / (r.M_d + r.rock_biot_coefficient ** 2 * M)
+        s0 = p.terzaghi_load * p.terzaghi_height * r.undrained_factor()
         sinf = p.terzaghi_load * p.terzaghi_height / r.M_d
         lam = _terms()
         U = 1 - np.sum(2 / lam ** 2 * np.exp(-lam ** 2 * t / self.t_c()))
@@ -152,10 +160,10 @@ class Terzaghi(Scene):
         s_inf = p.terzaghi_load * p.terzaghi_height / r.M_d
         scales = {"u": FieldScale(s_inf), "pm": FieldScale(self.p0())}
         # undrained state at t = 0+: uniform p0 and uniform vertical strain
-        M = 1.0 / r.storage
-        eps = -p.terzaghi_load / (r.M_d + r.rock_biot_coefficient ** 2 * M)
-        init = {"u": lambda x: np.column_stack([np.zeros(len(x)), eps * x[:, 1]]),
-                "pm": lambda x: np.full(len(x), self.p0())}
+        eps = -p.terzaghi_load * r.undrained_factor()
+        rest = p.terzaghi_start == "rest"
+        init = {"u": lambda x: np.column_stack([np.zeros(len(x)), (0.0 if rest else eps) * x[:, 1]]),
+                "pm": lambda x: np.full(len(x), 0.0 if rest else self.p0())}
         self._errors = {}
         return model, bcs, scales, init
 
@@ -166,7 +174,16 @@ class Terzaghi(Scene):
     def monitors(self, problem, t, X=None):
         """Settlement and base pressure every step; the relative L2 error of pm at
         the verification times T_v = c t / L^2 in ``TV`` (the series is costly)."""
+        v = problem.field_values("pm", X, t)[:, 0]
+        from mpi4py import MPI
+        pmax = problem.dm.comm.tompi4py().allreduce(float(v.max()) if len(v) else -np.inf, op=MPI.MAX)
+        pmin = problem.dm.comm.tompi4py().allreduce(float(v.min()) if len(v) else np.inf, op=MPI.MIN)
+        load = self[TerzaghiParams].terzaghi_load
+        # pressure outside [0, p0] (the undrained pressure bounds the solution), relative to the load
+        over = max(pmax - self.p0(), -pmin, 0.0) / load if t > 0 else 0.0
+        self._overshoot = max(getattr(self, "_overshoot", 0.0), over)
         out = {"settlement": self._settlement(problem, t, X), "settlement_exact": self.exact_settlement(t),
+               "p_overshoot": over,
                "p_base": problem.point_value("pm", (0.0, 0.0), X, t),
                "p_base_exact": float(self.exact_p(np.array([[0.0, 0.0]]), t)[0]) if t > 0 else self.p0()}
         for tv, th in zip(self.TV, self.hit_times()):
@@ -183,4 +200,5 @@ class Terzaghi(Scene):
         for tv, (ep, es) in sorted(self._errors.items()):
             err[f"p_l2_rel_Tv{tv:g}"] = ep
             err[f"settlement_rel_Tv{tv:g}"] = es
-        return {"error": err, "t_c": self.t_c(), "p0": self.p0()}
+        return {"error": err, "t_c": self.t_c(), "p0": self.p0(),
+                "p_overshoot_max_rel_load": getattr(self, "_overshoot", 0.0)}
