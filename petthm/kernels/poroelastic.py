@@ -120,3 +120,19 @@ def traction(u: str, boundary: str, t_of_x) -> FacetTerm:
     def f0(ctx):
         return -np.broadcast_to(t_of_x(ctx.x, ctx.t), ctx.shape + (ctx.dim,))
     return FacetTerm(u, boundary, f0, None)
+
+
+def pressure_stabilisation_terms(el: Elastic, p: str, factor: float = 1.0) -> tuple[list, list]:
+    """Flow-equation perturbation tau int grad q . grad(dp/dt), tau = factor h^2 / (4 (lambda + 2G))
+    (Aguilar, Gaspar, Lisbona & Rodrigo 2008): removes the non-physical pressure
+    oscillations of the first steps when dt << h^2 / c; consistent to O(h^2)."""
+    tau0 = factor / (4 * (el.lame + 2 * el.shear))
+
+    def f1(ctx):
+        return tau0 * ctx.h[:, :, None, None] ** 2 * _grad_dot(ctx, p)
+
+    def g3(ctx):
+        t = tau0 * ctx.h[:, 0] ** 2 * ctx.shift
+        return (t[:, None, None] * np.eye(el.dim))[:, None, None, :, None, :]
+    return ([CellResidual(p, None, f1, region=el.region)],
+            [CellJacobian(p, p, g3=g3, region=el.region)])

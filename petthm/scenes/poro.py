@@ -70,6 +70,8 @@ class TerzaghiParams:
     terzaghi_width: float = param(1.0, "m", "column width", lo=0.0, lo_open=True)
     terzaghi_load: float = param(1e6, "Pa", "compressive load sigma0 on the top", lo=0.0, lo_open=True)
     terzaghi_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2))
+    biot_stabilization: float = param(0.0, "-", "factor of the pressure stabilisation h^2/(4(lambda+2G)) "
+                                      "(0: off; 1: Aguilar et al. 2008)", lo=0.0)
     terzaghi_start: str = param("undrained", "-", "initial state: undrained (the t = 0+ solution) or rest "
                                 "(u = 0, p = 0; the load makes the first step undrained)",
                                 choices=("undrained", "rest"))
@@ -151,6 +153,9 @@ class Terzaghi(Scene):
                        Viscosity(r.fluid_viscosity))
         res, jac = pe.elastic_terms(el)
         fr, fj = tr.flow_terms(flow)
+        if p.biot_stabilization:
+            sr, sj = pe.pressure_stabilisation_terms(el, "pm", p.biot_stabilization)
+            fr, fj = fr + sr, fj + sj
         load = pe.traction("u", "top", lambda x, t: np.array([0.0, -p.terzaghi_load]))
         model = Model([FieldSpec("u", d, degree), FieldSpec("pm", 1, p.terzaghi_pressure_degree)],
                       res + fr, jac + fj, [load])
