@@ -207,3 +207,146 @@ class Terzaghi(Scene):
             err[f"settlement_rel_Tv{tv:g}"] = es
         return {"error": err, "t_c": self.t_c(), "p0": self.p0(),
                 "p_overshoot_max_rel_load": getattr(self, "_overshoot", 0.0)}
+
+
+# ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MandelParams:
+    """Mandel's problem, quarter domain (mandel; verification.md 6b)"""
+    mandel_a: float = param(10.0, "m", "half-width a (drained sides at x = +-a)", lo=0.0, lo_open=True)
+    mandel_b: float = param(10.0, "m", "half-height b (rigid plates at y = +-b)", lo=0.0, lo_open=True)
+    mandel_force: float = param(1e7, "N/m", "force F per unit length on each plate (mean stress F/a)",
+                                lo=0.0, lo_open=True)
+    mandel_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2))
+
+
+@register
+class Mandel(Scene):
+    name = "mandel"
+    description = "Mandel's problem (verification.md 6b): pressure incl. the Mandel-Cryer overshoot"
+    parameter_sets = (PoroRock, MandelParams)
+    time = TimeDefaults(final_time=700.0, dt_initial=0.0648, dt_growth=1.05, dt_max=1.3, mesh_size=0.5)
+    history_columns = ("p_centre", "p_centre_exact", "p_max_error")
+    TAU = (0.01, 0.05, 0.1, 0.2, 0.5, 1.0)
+
+    def solver_defaults(self, comm):
+        from ..solver import direct_solver_defaults
+        return direct_solver_defaults(comm)
+
+    def boundaries(self):
+        p = self[MandelParams]
+        return {"x0": lambda x: np.isclose(x[:, 0], 0.0), "y0": lambda x: np.isclose(x[:, 1], 0.0),
+                "xa": lambda x: np.isclose(x[:, 0], p.mandel_a), "yb": lambda x: np.isclose(x[:, 1], p.mandel_b)}
+
+    def generate_mesh(self, path, size):
+        p = self[MandelParams]
+        return meshing.box(path, [p.mandel_a, p.mandel_b], size, structured=True)
+
+    # -- reference (Cheng & Detournay 1988) -------------------------------------------
+    def _constants(self):
+        r = self[PoroRock]
+        S, al = r.storage, r.rock_biot_coefficient
+        Ku_S = S * r.K + al * al                              # S K_u
+        B = al / Ku_S
+        nu, G = r.rock_poisson_ratio, r.G
+        nu_u = (3 * Ku_S - 2 * G * S) / (2 * (3 * Ku_S + G * S))
+        return B, nu, nu_u, G, r.consolidation()
+
+    def roots(self, n=200):
+        from scipy.optimize import brentq
+        B, nu, nu_u, G, c = self._constants()
+        k = (1 - nu) / (nu_u - nu)
+        f = lambda x: np.tan(x) - k * x  # noqa: E731
+        out = []
+        for i in range(n):
+            lo, hi = i * np.pi + 1e-12, i * np.pi + np.pi / 2 - 1e-12
+            out.append(brentq(f, lo if i else 1e-9, hi))
+        return np.array(out)
+
+    def t_ref(self):
+        return self[MandelParams].mandel_a ** 2 / self._constants()[4]
+
+    def p0(self):
+        B, nu, nu_u, G, c = self._constants()
+        p = self[MandelParams]
+        return p.mandel_force * B * (1 + nu_u) / (3 * p.mandel_a)
+
+    def exact_p(self, x, t):
+        a = self[MandelParams].mandel_a
+        an = self._roots
+        e = np.exp(-an ** 2 * t / self.t_ref())
+        w = np.sin(an) / (an - np.sin(an) * np.cos(an)) * e
+        return 2 * self.p0() * np.sum((np.cos(np.multiply.outer(x[..., 0], an) / a) - np.cos(an)) * w, axis=-1)
+
+    def exact_grad_p(self, x, t):
+        a = self[MandelParams].mandel_a
+        an = self._roots
+        e = np.exp(-an ** 2 * t / self.t_ref())
+        w = np.sin(an) / (an - np.sin(an) * np.cos(an)) * e
+        dpdx = 2 * self.p0() * np.sum(-np.sin(np.multiply.outer(x[..., 0], an) / a) * (an / a) * w, axis=-1)
+        return np.stack([dpdx, np.zeros_like(dpdx)], axis=-1)
+
+    def _uy_factor(self, t, rate=False):
+        """u_y / y (or its time derivative)."""
+        B, nu, nu_u, G, c = self._constants()
+        p = self[MandelParams]
+        F, a = p.mandel_force, p.mandel_a
+        an = self._roots
+        e = np.exp(-an ** 2 * t / self.t_ref())
+        s = np.sin(an) * np.cos(an) / (an - np.sin(an) * np.cos(an))
+        if rate:
+            return F * (1 - nu_u) / (G * a) * np.sum(s * e * (-an ** 2 / self.t_ref()))
+        return -F * (1 - nu) / (2 * G * a) + F * (1 - nu_u) / (G * a) * np.sum(s * e)
+
+    def hit_times(self):
+        return [tau * self.t_ref() for tau in self.TAU]
+
+    def build(self, mesh, degree):
+        r, p = self[PoroRock], self[MandelParams]
+        self._roots = self.roots()
+        d = mesh.dim
+        el = pe.Elastic(r.rock_youngs_modulus, r.rock_poisson_ratio, d, p="pm", biot=r.rock_biot_coefficient)
+        flow = tr.Flow("matrix", "pm", None, r.storage, r.rock_permeability * np.eye(d),
+                       Viscosity(r.fluid_viscosity))
+        res, jac = pe.elastic_terms(el)
+        fr, fj = tr.flow_terms(flow)
+        model = Model([FieldSpec("u", d, degree), FieldSpec("pm", 1, p.mandel_pressure_degree)], res + fr, jac + fj)
+        zero = lambda x, t: np.zeros(len(x))  # noqa: E731
+        bcs = [Dirichlet("u", "x0", zero, components=(0,)), Dirichlet("u", "y0", zero, components=(1,)),
+               Dirichlet("u", "yb", lambda x, t: self._uy_factor(t) * x[:, 1],
+                         lambda x, t: self._uy_factor(t, rate=True) * x[:, 1], components=(1,)),
+               Dirichlet("pm", "xa", zero)]
+        B, nu, nu_u, G, c = self._constants()
+        F, a = p.mandel_force, p.mandel_a
+        scales = {"u": FieldScale(F * p.mandel_b / (G * a)), "pm": FieldScale(self.p0())}
+        init = {"u": lambda x: np.column_stack([F * nu_u * x[:, 0] / (2 * G * a),
+                                                -F * (1 - nu_u) * x[:, 1] / (2 * G * a)]),
+                "pm": lambda x: np.full(len(x), self.p0())}
+        self._errors, self._peak = {}, (0.0, 0.0)
+        return model, bcs, scales, init
+
+    def monitors(self, problem, t, X=None):
+        pc = problem.point_value("pm", (0.0, 0.0), X, t)
+        ex = float(self.exact_p(np.array([[0.0, 0.0]]), t)[0]) if t > 0 else self.p0()
+        if pc > self._peak[0]:
+            self._peak = (pc, t)
+        out = {"p_centre": pc, "p_centre_exact": ex}
+        for tau, th in zip(self.TAU, self.hit_times()):
+            if abs(t - th) <= 1e-9 * th:
+                from mpi4py import MPI
+                v = problem.field_values("pm", X, t)[:, 0]
+                x = problem.disc.field_node_coordinates("pm")
+                e = float(np.abs(v - self.exact_p(x, t)).max()) / self.p0() if len(v) else 0.0
+                e = problem.dm.comm.tompi4py().allreduce(e, op=MPI.MAX)
+                out["p_max_error"] = e
+                self._errors[tau] = e
+        return out
+
+    def report(self, problem, t):
+        tau = np.linspace(0.02, 0.1, 400)
+        pk = max(float(self.exact_p(np.array([[0.0, 0.0]]), s * self.t_ref())[0]) for s in tau)
+        err = {f"p_max_rel_tau{k:g}": v for k, v in sorted(self._errors.items())}
+        err["p_max_rel"] = max(self._errors.values()) if self._errors else None
+        err["mandel_cryer_peak_rel_p0"] = abs(self._peak[0] - pk) / self.p0()
+        return {"error": err, "peak_p_over_p0": self._peak[0] / self.p0(), "peak_exact_over_p0": pk / self.p0(),
+                "peak_time_tau": self._peak[1] / self.t_ref(), "p0": self.p0()}
