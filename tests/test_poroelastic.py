@@ -97,3 +97,24 @@ def test_mandel_pressure_and_mandel_cryer_peak(tmp_path):
     assert len([k for k in e if k.startswith("p_max_rel_tau")]) == 6
     assert e["p_max_rel"] <= 1e-2
     assert e["mandel_cryer_peak_rel_p0"] <= 5e-3 and s["peak_p_over_p0"] > 1.01
+
+
+def test_thermoelastic_jacobian_matches_finite_differences(tmp_path):
+    """The thermal-strain coupling u-Tm (and conduction)."""
+    problem = _problem(tmp_path, "thermal_stress", thm_mesh_size=20, thm_thermal_surface_size=2)
+    err = jacobian_fd_error(problem, t=1e6, shift=1e-5)
+    print("thermoelastic jacobian fd error", err)
+    assert err <= 1e-6
+
+
+def test_thermal_stress_of_a_constrained_half_space(tmp_path):
+    """verification.md 7b: temperature within 5e-3 of dT, lateral stress within
+    1e-2 (relative L2), surface displacement against 2 sqrt(kappa t/pi) scaling
+    (10.5579 mm at 1e8 s), at 1e6, 1e7 and 1e8 s."""
+    _, s = run_petthm("thermal_stress", tmp_path)
+    e = s["error"]
+    print(e)
+    assert len(e) == 9
+    assert max(v for k, v in e.items() if k.startswith("T_max")) <= 5e-3
+    assert max(v for k, v in e.items() if k.startswith("stress")) <= 1e-2
+    assert max(v for k, v in e.items() if k.startswith("surface")) <= 1e-2

@@ -350,3 +350,121 @@ class Mandel(Scene):
         err["mandel_cryer_peak_rel_p0"] = abs(self._peak[0] - pk) / self.p0()
         return {"error": err, "peak_p_over_p0": self._peak[0] / self.p0(), "peak_exact_over_p0": pk / self.p0(),
                 "peak_time_tau": self._peak[1] / self.t_ref(), "p0": self.p0()}
+
+
+# ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ThermalStressParams:
+    """Cooling of a laterally constrained half-space (thermal_stress; verification.md 7b)"""
+    rock_youngs_modulus: float = param(37.5e9, "Pa", "drained Young's modulus E", lo=0.0, lo_open=True)
+    rock_poisson_ratio: float = param(0.25, "-", "Poisson ratio nu", lo=0.0, hi=0.4999)
+    rock_thermal_expansion: float = param(2.4e-5, "1/K", "volumetric thermal expansion beta_s", lo=0.0)
+    rock_density: float = param(2650.0, "kg/m3", "rock density", lo=0.0, lo_open=True)
+    rock_heat_capacity: float = param(800.0, "J/(kg K)", "rock heat capacity", lo=0.0, lo_open=True)
+    rock_conductivity: float = param(2.9, "W/(m K)", "rock conductivity", lo=0.0, lo_open=True)
+    initial_temperature: float = param(80.0, "degC", "initial temperature T0")
+    surface_temperature: float = param(20.0, "degC", "surface temperature for t > 0")
+    thermal_depth: float = param(60.0, "m", "depth of the column (> 4 sqrt(kappa t_final))", lo=0.0, lo_open=True)
+    thermal_width: float = param(1.0, "m", "width of the column", lo=0.0, lo_open=True)
+    thermal_surface_size: float = param(0.1, "m", "mesh size at the surface", lo=0.0, lo_open=True)
+
+
+@register
+class ThermalStress(Scene):
+    name = "thermal_stress"
+    description = "1D cooling with constrained lateral strain (verification.md 7b): T, lateral stress, surface motion"
+    parameter_sets = (ThermalStressParams,)
+    time = TimeDefaults(final_time=1e8, dt_initial=10.0, dt_growth=1.02, dt_max=1e6, mesh_size=5.0,
+                        output_interval=50)
+    history_columns = ("surface_displacement", "surface_displacement_exact", "T_error", "stress_error")
+    TIMES = (1e6, 1e7, 1e8)
+
+    def solver_defaults(self, comm):
+        from ..solver import direct_solver_defaults
+        return direct_solver_defaults(comm)
+
+    def boundaries(self):
+        p = self[ThermalStressParams]
+        return {"surface": lambda x: np.isclose(x[:, 0], 0.0), "bottom": lambda x: np.isclose(x[:, 0], p.thermal_depth),
+                "sides": lambda x: np.isclose(x[:, 1], 0.0) | np.isclose(x[:, 1], p.thermal_width)}
+
+    def generate_mesh(self, path, size):
+        p = self[ThermalStressParams]
+        return meshing.box(path, [p.thermal_depth, p.thermal_width], size,
+                           grading=meshing.Grading(axis=0, size_min=p.thermal_surface_size,
+                                                   distance=0.5 * p.thermal_depth))
+
+    def kappa(self):
+        p = self[ThermalStressParams]
+        return p.rock_conductivity / (p.rock_density * p.rock_heat_capacity)
+
+    def dT_exact(self, x, t):
+        from scipy.special import erfc
+        p = self[ThermalStressParams]
+        dTs = p.surface_temperature - p.initial_temperature
+        return dTs * erfc(x[..., 0] / (2 * np.sqrt(self.kappa() * t))) if t > 0 else 0.0 * x[..., 0]
+
+    def stress_exact(self, x, t):
+        p = self[ThermalStressParams]
+        return -p.rock_youngs_modulus * p.rock_thermal_expansion * self.dT_exact(x, t) / (3 * (1 - p.rock_poisson_ratio))
+
+    def surface_exact(self, t):
+        """Surface displacement u_x(0) (x is depth, positive down): -int eps_xx dx."""
+        p = self[ThermalStressParams]
+        nu, b = p.rock_poisson_ratio, p.rock_thermal_expansion
+        dTs = p.surface_temperature - p.initial_temperature
+        return -b * (1 + nu) / (3 * (1 - nu)) * dTs * 2 * np.sqrt(self.kappa() * t / np.pi)
+
+    def hit_times(self):
+        return list(self.TIMES)
+
+    def build(self, mesh, degree):
+        p = self[ThermalStressParams]
+        T0 = p.initial_temperature + 273.15
+        Ts = p.surface_temperature + 273.15
+        self.el = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, mesh.dim, T="Tm",
+                             thermal_expansion=p.rock_thermal_expansion, T_ref=T0)
+        heat = tr.Heat("matrix", "Tm", p.rock_density * p.rock_heat_capacity, p.rock_conductivity, degree=degree)
+        r1, j1 = pe.elastic_terms(self.el)
+        r2, j2 = tr.heat_terms(heat)
+        model = Model([FieldSpec("u", mesh.dim, degree), FieldSpec("Tm", 1, degree)], r1 + r2, j1 + j2)
+        zero = lambda x, t: np.zeros(len(x))  # noqa: E731
+        bcs = [Dirichlet("u", "sides", zero, components=(1,)), Dirichlet("u", "bottom", zero, components=(0,)),
+               Dirichlet("Tm", "surface", lambda x, t: np.full(len(x), Ts))]
+        scale_u = abs(self.surface_exact(self.time.final_time)) or 1.0
+        scales = {"u": FieldScale(scale_u), "Tm": FieldScale(abs(T0 - Ts) or 1.0, T0)}
+        self._errors = {}
+        return model, bcs, scales, {"u": lambda x: np.zeros((len(x), mesh.dim)), "Tm": lambda x: np.full(len(x), T0)}
+
+    def _errors_at(self, problem, t, X=None):
+        from mpi4py import MPI
+        p = self[ThermalStressParams]
+        comm = problem.dm.comm.tompi4py()
+        T = problem.field_values("Tm", X, t)[:, 0]
+        x = problem.disc.field_node_coordinates("Tm")
+        dT = abs(p.surface_temperature - p.initial_temperature)
+        eT = float(np.abs(T - (p.initial_temperature + 273.15) - self.dT_exact(x, t)).max()) / dT if len(T) else 0.0
+        eT = comm.allreduce(eT, op=MPI.MAX)
+        xl, _ = problem.local_arrays(X or problem.X, t)
+        asm = problem.asm
+        s_ref = abs(self.stress_exact(np.zeros((1, 2)), t)[0])
+        num = asm.integrate(xl, lambda ctx: (pe.stress(self.el, ctx)[..., 1, 1] - self.stress_exact(ctx.x, t)) ** 2, t)
+        area = asm.integrate(xl, lambda ctx: np.ones(ctx.shape), t)
+        return eT, float(np.sqrt(num / area)) / s_ref
+
+    def monitors(self, problem, t, X=None):
+        ux = problem.point_value("u", (0.0, 0.0), X, t, component=0)
+        out = {"surface_displacement": ux, "surface_displacement_exact": self.surface_exact(t)}
+        for th in self.TIMES:
+            if abs(t - th) <= 1e-9 * th:
+                eT, es = self._errors_at(problem, t, X)
+                out.update({"T_error": eT, "stress_error": es})
+                self._errors[th] = (eT, es, abs(ux - out["surface_displacement_exact"]) /
+                                    abs(out["surface_displacement_exact"]))
+        return out
+
+    def report(self, problem, t):
+        err = {}
+        for th, (eT, es, eu) in sorted(self._errors.items()):
+            err.update({f"T_max_rel_t{th:g}": eT, f"stress_l2_rel_t{th:g}": es, f"surface_u_rel_t{th:g}": eu})
+        return {"error": err}
