@@ -193,12 +193,9 @@ class HeatErfc(Scene):
         return model, dirichlet, scales, {FIELD: lambda x: np.full(len(x), T0)}
 
     def _nodal_error(self, problem, t):
-        T = problem.field_values(FIELD, t=t)[:, 0]
-        x = problem.disc.field_node_coordinates(FIELD)
-        err = np.abs(T - self.exact(x, t)).max() if len(T) else 0.0
-        comm = problem.disc.mesh.dm.comm.tompi4py()
         p = self[ErfcParams]
-        return comm.allreduce(err, op=_max()) / abs(p.initial_temperature - p.surface_temperature)
+        err = problem.max_nodal_error(FIELD, lambda x: self.exact(x, t), t=t)
+        return err / abs(p.initial_temperature - p.surface_temperature)
 
     def monitors(self, problem, t, X=None):
         T = problem.field_values(FIELD, t=t)[:, 0]

@@ -333,11 +333,7 @@ class Mandel(Scene):
         out = {"p_centre": pc, "p_centre_exact": ex}
         for tau, th in zip(self.TAU, self.hit_times()):
             if abs(t - th) <= 1e-9 * th:
-                from mpi4py import MPI
-                v = problem.field_values("pm", X, t)[:, 0]
-                x = problem.disc.field_node_coordinates("pm")
-                e = float(np.abs(v - self.exact_p(x, t)).max()) / self.p0() if len(v) else 0.0
-                e = problem.dm.comm.tompi4py().allreduce(e, op=MPI.MAX)
+                e = problem.max_nodal_error("pm", lambda x: self.exact_p(x, t), X, t) / self.p0()
                 out["p_max_error"] = e
                 self._errors[tau] = e
         return out
@@ -437,14 +433,10 @@ class ThermalStress(Scene):
         return model, bcs, scales, {"u": lambda x: np.zeros((len(x), mesh.dim)), "Tm": lambda x: np.full(len(x), T0)}
 
     def _errors_at(self, problem, t, X=None):
-        from mpi4py import MPI
         p = self[ThermalStressParams]
-        comm = problem.dm.comm.tompi4py()
-        T = problem.field_values("Tm", X, t)[:, 0]
-        x = problem.disc.field_node_coordinates("Tm")
         dT = abs(p.surface_temperature - p.initial_temperature)
-        eT = float(np.abs(T - (p.initial_temperature + 273.15) - self.dT_exact(x, t)).max()) / dT if len(T) else 0.0
-        eT = comm.allreduce(eT, op=MPI.MAX)
+        T0 = p.initial_temperature + 273.15
+        eT = problem.max_nodal_error("Tm", lambda x: T0 + self.dT_exact(x, t), X, t) / dT
         xl, _ = problem.local_arrays(X or problem.X, t)
         asm = problem.asm
         s_ref = abs(self.stress_exact(np.zeros((1, 2)), t)[0])
