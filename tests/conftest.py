@@ -32,6 +32,20 @@ def run_petthm(scene, outdir, *options, ranks=1, check=True, timeout=600):
     return proc, summary
 
 
+def build_problem(tmp_path, scene, **opts):
+    """Set up (not run) a scene in this process with -thm_* options; returns its Problem."""
+    from petsc4py import PETSc
+    from petthm.app import Run, make_scene
+    o = PETSc.Options()
+    for k in list(o.getAll()):
+        o.delValue(k)
+    o.setValue("thm_output_dir", str(tmp_path))
+    for k, v in opts.items():
+        o.setValue(k, v)
+    run = Run(make_scene(scene))
+    return run.setup(run.build_mesh())[1]
+
+
 def fitted_slope(h, e):
     """Least-squares slope of log(e) against log(h)."""
     return float(np.polyfit(np.log(h), np.log(e), 1)[0])

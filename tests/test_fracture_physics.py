@@ -2,31 +2,17 @@
 against finite differences, and the verification scenes fracture_flow_patch,
 radial_flow, leakoff_1d and lauwerier against their analytical solutions,
 with the mass and energy balance of every step."""
-import dataclasses
-import os
 
 import numpy as np
 import pytest
-from petsc4py import PETSc
 
-from petthm.app import Run, make_scene
 from petthm.verify import jacobian_fd_error
 
-from conftest import run_petthm
+from conftest import build_problem, run_petthm
 
 
 def _problem(tmp_path, scene, **opts):
-    o = PETSc.Options()
-    for k in list(o.getAll()):
-        o.delValue(k)
-    o.setValue("thm_output_dir", str(tmp_path))
-    for k, v in opts.items():
-        o.setValue(k, v)
-    sc = make_scene(scene)
-    run = Run(sc)
-    mesh = run.build_mesh()
-    disc, problem, control, _ = run.setup(mesh)
-    return problem
+    return build_problem(tmp_path, scene, **opts)
 
 
 COARSE_LAUWERIER = dict(thm_mesh_size=40, thm_lauwerier_fracture_size=10, thm_lauwerier_width=20)

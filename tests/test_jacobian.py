@@ -15,20 +15,9 @@ from petthm.verify import jacobian_fd_error
 
 
 def _heat_problem(tmp_path, dim, degree, **opts):
-    o = PETSc.Options()
-    for k in list(o.getAll()):
-        o.delValue(k)
-    o.setValue("thm_mms_dim", dim)
-    o.setValue("thm_fe_degree", degree)
-    o.setValue("thm_mesh_size", 0.5 if dim == 3 else 0.25)
-    o.setValue("thm_output_dir", str(tmp_path))
-    for k, v in opts.items():
-        o.setValue(k, v)
-    scene = make_scene("heat_mms")
-    run = Run(scene)
-    mesh = run.build_mesh()
-    disc, problem, control, _ = run.setup(mesh)
-    return problem
+    from conftest import build_problem
+    return build_problem(tmp_path, "heat_mms", thm_mms_dim=dim, thm_fe_degree=degree,
+                         thm_mesh_size=0.5 if dim == 3 else 0.25, **opts)
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -2,24 +2,14 @@
 differences, rollers on single components, and Terzaghi's consolidation."""
 import numpy as np
 import pytest
-from petsc4py import PETSc
 
-from petthm.app import Run, make_scene
 from petthm.verify import jacobian_fd_error
 
-from conftest import run_petthm
+from conftest import build_problem, run_petthm
 
 
 def _problem(tmp_path, scene, **opts):
-    o = PETSc.Options()
-    for k in list(o.getAll()):
-        o.delValue(k)
-    o.setValue("thm_output_dir", str(tmp_path))
-    for k, v in opts.items():
-        o.setValue(k, v)
-    run = Run(make_scene(scene))
-    mesh = run.build_mesh()
-    return run.setup(mesh)[1]
+    return build_problem(tmp_path, scene, **opts)
 
 
 @pytest.mark.parametrize("pdeg", [1, 2])

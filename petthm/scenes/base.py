@@ -69,6 +69,7 @@ class Scene:
     time: TimeDefaults = TimeDefaults(1.0, 0.1)
     history_columns: tuple = ()
     fractured: bool = False          # split the mesh along its fractures (physics.md section 1)
+    direct_solve: bool = False       # propose a sparse direct solve (solver.direct_solver_defaults)
 
     def __init__(self, run: P.RunParams, values: dict):
         self.run = run
@@ -100,6 +101,9 @@ class Scene:
     def solver_defaults(self, comm) -> dict[str, str]:
         """Solver options this scene proposes over ``solver.SOLVER_DEFAULTS``
         (the user's options still win)."""
+        if self.direct_solve:
+            from ..solver import direct_solver_defaults
+            return direct_solver_defaults(comm)
         return {}
 
     def hit_times(self) -> list[float]:

@@ -108,15 +108,12 @@ class FractureScene(Scene):
     """Shared set-up of the rigid-fracture scenes."""
     fractured = True
     flow_dim = 1                     # dimension of the flow in the fracture (for the well index)
-
-    def solver_defaults(self, comm):
-        """Sparse direct solves: these coupled, advection-dominated fracture-matrix
-        systems defeat GMRES + GAMG (hundreds of iterations, failed steps)."""
-        from ..solver import direct_solver_defaults
-        return direct_solver_defaults(comm)
+    # sparse direct solves: these coupled, advection-dominated fracture-matrix
+    # systems defeat GMRES + GAMG (hundreds of iterations, failed steps)
+    direct_solve = True
 
     def fracture_model(self, mesh, degree, *, heat: bool, permeability=None, matrix_storage=0.0,
-                       matrix_thermal_storage=0.0, wells_on=True, rock_conductivity=None) -> Model:
+                       matrix_thermal_storage=0.0, rock_conductivity=None) -> Model:
         """Fields, terms and ties: pf (+ Tf, Tm with ``heat``; + pm with a
         ``permeability`` tensor)."""
         fl, fp, m = self[FluidFlow], self[FractureProps], self.material
@@ -220,7 +217,6 @@ class FractureScene(Scene):
         if injector_at is not None:
             out["injection_pressure"] = problem.point_value("pf", injector_at, X, t)
         if producer_at is not None:
-            w = self[Wells]
             prod = next(p for p in self.wells if p.name == "producer")
             pp = problem.point_value("pf", producer_at, X, t)
             vals = {"pf": pp}
@@ -229,7 +225,6 @@ class FractureScene(Scene):
                 out["production_temperature"] = vals["Tf"] - CELSIUS
             out["production_rate"] = prod.residual(vals, t)["pf"]
             out["production_pressure_node"] = pp
-            del w
         return out
 
     def balance_monitors(self, problem, t, X) -> dict:
@@ -246,6 +241,17 @@ class FractureScene(Scene):
 def _min():
     from mpi4py import MPI
     return MPI.MIN
+
+
+def far_sides(width: float, axis: int = 1):
+    """Boundary predicate of the two far sides x[axis] = 0 and 2 W of a strip."""
+    return lambda x: np.isclose(x[:, axis], 0.0) | np.isclose(x[:, axis], 2 * width)
+
+
+def strip_with_fracture(path, length, width, size, fracture_size):
+    """[0, L] x [0, 2W] with a fracture along y = W cutting both ends, graded toward it."""
+    fr = [meshing.Fracture("segment", p0=(0.0, width), p1=(length, width), size=fracture_size)]
+    return meshing.box_with_fractures(path, [length, 2 * width], size, fr, grading_distance=0.5 * width)
 
 
 # -- fracture_flow_patch ------------------------------------------------------------------
@@ -421,14 +427,11 @@ class Leakoff1D(FractureScene):
     _heat = False
 
     def boundaries(self):
-        W = self[LeakoffParams].leakoff_width
-        return {"far": lambda x: np.isclose(x[:, 1], 0.0) | np.isclose(x[:, 1], 2 * W)}
+        return {"far": far_sides(self[LeakoffParams].leakoff_width)}
 
     def generate_mesh(self, path, size):
         p = self[LeakoffParams]
-        L, W = p.leakoff_length, p.leakoff_width
-        fr = [meshing.Fracture("segment", p0=(0.0, W), p1=(L, W), size=p.leakoff_fracture_size)]
-        return meshing.box_with_fractures(path, [L, 2 * W], size, fr, grading_distance=0.5 * W)
+        return strip_with_fracture(path, p.leakoff_length, p.leakoff_width, size, p.leakoff_fracture_size)
 
     def diffusivity(self):
         mu = _viscosity(self[FluidFlow]).value
@@ -529,15 +532,13 @@ class Lauwerier(FractureScene):
 
     def boundaries(self):
         p = self[LauwerierParams]
-        W, n = p.lauwerier_width, p.lauwerier_dim - 1          # the normal axis: y (2D) or z (3D)
-        return {"far": lambda x: np.isclose(x[:, n], 0.0) | np.isclose(x[:, n], 2 * W)}
+        return {"far": far_sides(p.lauwerier_width, p.lauwerier_dim - 1)}   # normal axis: y (2D), z (3D)
 
     def generate_mesh(self, path, size):
         p = self[LauwerierParams]
         L, W, H = p.lauwerier_length, p.lauwerier_width, p.lauwerier_height
         if p.lauwerier_dim == 2:
-            fr = [meshing.Fracture("segment", p0=(0.0, W), p1=(L, W), size=p.lauwerier_fracture_size)]
-            return meshing.box_with_fractures(path, [L, 2 * W], size, fr, grading_distance=0.5 * W)
+            return strip_with_fracture(path, L, W, size, p.lauwerier_fracture_size)
         fr = [meshing.Fracture("rectangle", center=(0.5 * L, 0.5 * H, W), half=(0.5 * L, 0.5 * H),
                                size=p.lauwerier_fracture_size)]
         return meshing.box_with_fractures(path, [L, H, 2 * W], size, fr, grading_distance=0.5 * W)
@@ -831,14 +832,12 @@ class LeakoffHeat(FractureScene):
     _heat = True
 
     def boundaries(self):
-        W = self[LeakoffHeatParams].leakoff_heat_width
-        return {"far": lambda x: np.isclose(x[:, 1], 0.0) | np.isclose(x[:, 1], 2 * W)}
+        return {"far": far_sides(self[LeakoffHeatParams].leakoff_heat_width)}
 
     def generate_mesh(self, path, size):
         p = self[LeakoffHeatParams]
-        L, W = p.leakoff_heat_length, p.leakoff_heat_width
-        fr = [meshing.Fracture("segment", p0=(0.0, W), p1=(L, W), size=p.leakoff_heat_fracture_size)]
-        return meshing.box_with_fractures(path, [L, 2 * W], size, fr, grading_distance=0.5 * W)
+        return strip_with_fracture(path, p.leakoff_heat_length, p.leakoff_heat_width, size,
+                                   p.leakoff_heat_fracture_size)
 
     def wells_at(self):
         p = self[LeakoffHeatParams]

@@ -83,18 +83,13 @@ def _terms(n=400):
 
 @register
 class Terzaghi(Scene):
+    direct_solve = True             # GMRES + GAMG does not handle the u-p/u-T saddle point
     name = "terzaghi"
     description = "1D consolidation (verification.md 6a): pressure and settlement vs the series solution"
     parameter_sets = (PoroRock, TerzaghiParams)
     time = TimeDefaults(final_time=1300.0, dt_initial=0.0648, dt_growth=1.05, dt_max=2.0, mesh_size=0.5)
     history_columns = ("settlement", "settlement_exact", "p_base", "p_base_exact", "p_l2_rel", "p_overshoot")
     TV = (0.01, 0.1, 0.5, 1.0)
-
-    def solver_defaults(self, comm):
-        """A sparse direct solve: GMRES + GAMG does not handle the u-p saddle point
-        (the field-split recipe comes with the contact work of issue 4)."""
-        from ..solver import direct_solver_defaults
-        return direct_solver_defaults(comm)
 
     def boundaries(self):
         p = self[TerzaghiParams]
@@ -222,16 +217,13 @@ class MandelParams:
 
 @register
 class Mandel(Scene):
+    direct_solve = True             # GMRES + GAMG does not handle the u-p/u-T saddle point
     name = "mandel"
     description = "Mandel's problem (verification.md 6b): pressure incl. the Mandel-Cryer overshoot"
     parameter_sets = (PoroRock, MandelParams)
     time = TimeDefaults(final_time=700.0, dt_initial=0.0648, dt_growth=1.05, dt_max=1.3, mesh_size=0.5)
     history_columns = ("p_centre", "p_centre_exact", "p_max_error", "plate_force_rel_error")
     TAU = (0.01, 0.05, 0.1, 0.2, 0.5, 1.0)
-
-    def solver_defaults(self, comm):
-        from ..solver import direct_solver_defaults
-        return direct_solver_defaults(comm)
 
     def boundaries(self):
         p = self[MandelParams]
@@ -375,6 +367,7 @@ class ThermalStressParams:
 
 @register
 class ThermalStress(Scene):
+    direct_solve = True             # GMRES + GAMG does not handle the u-p/u-T saddle point
     name = "thermal_stress"
     description = "1D cooling with constrained lateral strain (verification.md 7b): T, lateral stress, surface motion"
     parameter_sets = (ThermalStressParams,)
@@ -382,10 +375,6 @@ class ThermalStress(Scene):
                         output_interval=50)
     history_columns = ("surface_displacement", "surface_displacement_exact", "T_error", "stress_error")
     TIMES = (1e6, 1e7, 1e8)
-
-    def solver_defaults(self, comm):
-        from ..solver import direct_solver_defaults
-        return direct_solver_defaults(comm)
 
     def boundaries(self):
         p = self[ThermalStressParams]
