@@ -221,7 +221,7 @@ class Assembler:
         self._tabs = {p: _Tab(dim, p, self.rule.points) for p in (1, 2)}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
         self._ref_cache = {}
-        self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in model.facets}
+        self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in self.model.facets}
         self._build_pattern()
 
     @staticmethod

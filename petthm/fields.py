@@ -277,7 +277,7 @@ class Discretisation:
                 points = np.hstack([points, edges])
             base_off = self.offsets[base][points - self.pstart]
             self._trace_cache[key] = (base_off[:, :, None] + np.arange(f.ncomp)).reshape(
-                len(base_off), -1).astype(compat.INT)
+                len(base_off), base_off.shape[1] * f.ncomp).astype(compat.INT)
         return self._trace_cache[key]
 
     # -- helpers ----------------------------------------------------------------

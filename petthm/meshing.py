@@ -167,6 +167,7 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     wpts = [(0, occ.addPoint(*(tuple(w) + (0.0,) * (3 - len(w))))) for w in wells]
     _, mapping = occ.fragment([(dim, dom)], tools + wpts)
     occ.synchronize()
+    mapping = _drop_outside(gmsh, dim, mapping)
     cells = [t for (d, t) in mapping[0] if d == dim]
     gmsh.model.addPhysicalGroup(dim, cells, 1)
     outer = gmsh.model.getBoundary([(dim, c) for c in cells], combined=True, oriented=False)
@@ -200,6 +201,31 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     return _write(gmsh, dim, path)
+
+
+def _drop_outside(gmsh, dim: int, mapping: list) -> list:
+    """Remove the parts of the fractures that lie outside the domain (a
+    fracture cut by a symmetry plane): a fracture piece is kept if it bounds a
+    cell of the domain."""
+    inside = set()
+    for (d, t) in mapping[0]:
+        if d == dim:
+            for (_, b) in gmsh.model.getBoundary([(d, t)], combined=False, oriented=False):
+                inside.add(b)
+            inside.update(gmsh.model.mesh.getEmbedded(d, t) and
+                          [e for (ed, e) in gmsh.model.mesh.getEmbedded(d, t) if ed == dim - 1])
+            _, down = gmsh.model.getAdjacencies(d, t)
+            inside.update(int(b) for b in down)
+    out = [mapping[0]]
+    drop = []
+    for m in mapping[1:]:
+        keep = [(d, t) for (d, t) in m if d != dim - 1 or t in inside]
+        drop += [(d, t) for (d, t) in m if d == dim - 1 and t not in inside]
+        out.append(keep)
+    if drop:
+        gmsh.model.occ.remove(drop, recursive=True)
+        gmsh.model.occ.synchronize()
+    return out
 
 
 def _threshold(mf, kind: str, ents, size_min: float, size_max: float, distance: float) -> int:

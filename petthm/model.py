@@ -69,13 +69,16 @@ class PointTerm:
 class Model:
     """The active fields and every term, each on its region ("matrix": the
     cells; "fracture": the - faces of the cohesive cells, where the names
-    "Tm-"/"Tm+" denote the traces of a matrix field on the two faces)."""
+    "Tm-"/"Tm+" denote the traces of a matrix field on the two faces).
+    ``bounds`` make the problem a variational inequality (contact: the
+    traction ``lam`` >= 0), solved by SNES's VI Newton methods."""
     fields: list[FieldSpec]
     residuals: list[CellResidual] = field(default_factory=list)
     jacobians: list[CellJacobian] = field(default_factory=list)
     facets: list[FacetTerm] = field(default_factory=list)
     points: list[PointTerm] = field(default_factory=list)
     ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
+    bounds: dict = field(default_factory=dict)    # {field: (lower, upper)} SI, None: unbounded
 
     def regions(self) -> list[str]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

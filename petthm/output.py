@@ -97,10 +97,11 @@ class FieldWriter:
         parts = self.comm.gather((self.local_gid, np.asarray(values)), root=0)
         if self.rank != 0:
             return None
-        ncomp = parts[0][1].reshape(len(parts[0][0]), -1).shape[1]
+        filled = [(g, v) for g, v in parts if len(g)]         # ranks without nodes send nothing
+        ncomp = filled[0][1].reshape(len(filled[0][0]), -1).shape[1] if filled else 1
         out = np.zeros((self.nnodes, ncomp))
-        for g, v in parts:
-            out[g] = v.reshape(len(g), -1)
+        for g, v in filled:
+            out[g] = v.reshape(len(g), ncomp)
         return out[:, 0] if ncomp == 1 else out
 
     def write(self, t: float, fields: dict[str, np.ndarray]) -> None:

@@ -51,9 +51,11 @@ def direct_solver_defaults(comm) -> dict[str, str]:
     for package in ("mumps", "superlu_dist"):
         if PETSc.Sys.hasExternalPackage(package):
             return dict(out, pc_type="lu", pc_factor_mat_solver_type=package)
+    # PETSc's own LU does not pivot: rows with a zero diagonal (the contact
+    # multipliers) are first swapped with rows that have a non-zero there
     if comm.size == 1:
-        return dict(out, pc_type="lu")
-    return dict(out, pc_type="redundant", redundant_pc_type="lu")
+        return dict(out, pc_type="lu", pc_factor_nonzeros_along_diagonal="")
+    return dict(out, pc_type="redundant", redundant_pc_type="lu", redundant_pc_factor_nonzeros_along_diagonal="")
 
 
 #: option names petthm inserted itself (never reported as unused)
@@ -211,6 +213,23 @@ class Problem:
         err = float(np.abs(v - exact(x)).max()) if len(v) else 0.0
         return self.dm.comm.tompi4py().allreduce(err, op=MPI.MAX)
 
+    def variable_bounds(self) -> tuple[PETSc.Vec, PETSc.Vec]:
+        """Global (scaled) lower and upper bounds of the unknowns from
+        ``model.bounds`` (everything else unbounded)."""
+        lo, hi = self.dm.createLocalVec(), self.dm.createLocalVec()
+        lo.set(PETSc.NINFINITY)
+        hi.set(PETSc.INFINITY)
+        for name, (a, b) in self.model.bounds.items():
+            sc, dofs = self.scales[name], self.disc.field_local_dofs(name)
+            if a is not None:
+                lo.getArray()[dofs] = (a - sc.offset) / sc.scale
+            if b is not None:
+                hi.getArray()[dofs] = (b - sc.offset) / sc.scale
+        XL, XU = self.dm.createGlobalVec(), self.dm.createGlobalVec()
+        self.dm.localToGlobal(lo, XL, addv=PETSc.InsertMode.INSERT_VALUES)
+        self.dm.localToGlobal(hi, XU, addv=PETSc.InsertMode.INSERT_VALUES)
+        return XL, XU
+
     def region(self, name: str) -> Assembler:
         return next(a for a in self.assemblers if a.region == name)
 
@@ -262,7 +281,17 @@ class Problem:
     def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
         vals = [a.jacobian_values(xl, xdl, t, shift) for a in self.assemblers]
         vals += [p.jacobian_values(xl, t, self.scales, self.inv_rscale) for p in self.points]
+        vals.append(np.zeros(len(self._diagonal())))
         return np.concatenate(vals)
+
+    def _diagonal(self) -> np.ndarray:
+        """Global indices of the owned rows: their diagonal entries are in the
+        pattern (zero where no term puts one, e.g. the contact rows), as
+        MatDiagonalSet in SNES VI needs."""
+        if getattr(self, "_diag", None) is None:
+            lo, hi = self.disc.ownership_range()
+            self._diag = np.arange(lo, hi, dtype=compat.INT)
+        return self._diag
 
     def ijacobian(self, ts, t, X, Xdot, shift, J, P):
         self._ev_jac.begin()
@@ -275,8 +304,8 @@ class Problem:
 
     def create_matrix(self) -> PETSc.Mat:
         if self.J is None:
-            rows = [a.coo_rows for a in self.assemblers] + [p.coo_rows for p in self.points]
-            cols = [a.coo_cols for a in self.assemblers] + [p.coo_cols for p in self.points]
+            rows = [a.coo_rows for a in self.assemblers] + [p.coo_rows for p in self.points] + [self._diagonal()]
+            cols = [a.coo_cols for a in self.assemblers] + [p.coo_cols for p in self.points] + [self._diagonal()]
             self.J = self.dm.createMat()
             compat.coo_preallocate(self.J, np.concatenate(rows), np.concatenate(cols))
         return self.J
@@ -292,6 +321,7 @@ class Problem:
         compat.coo_set_values(J, self.jacobian_values(xl, xdl, t, shift))
         J.assemble()
         diag = J.getDiagonal()
+        rowmax = None
         names, isets, sub = self.dm.createFieldDecomposition()
         out = {}
         for name, iset in zip(names, isets):
@@ -299,10 +329,27 @@ class Problem:
             n = d.getSize()
             mean = d.norm(PETSc.NormType.NORM_1) / max(n, 1)
             diag.restoreSubVector(iset, d)
+            if mean == 0.0:              # a multiplier's rows (contact): their largest entries
+                rowmax = rowmax or self._row_max_abs(J)
+                d = rowmax.getSubVector(iset)
+                mean = d.norm(PETSc.NormType.NORM_1) / max(n, 1)
+                rowmax.restoreSubVector(iset, d)
             self.scales[name].rscale = mean if mean > 0 and math.isfinite(mean) else 1.0
             out[name] = self.scales[name].rscale
         self._update_row_scales()
         return out
+
+    @staticmethod
+    def _row_max_abs(J: PETSc.Mat) -> PETSc.Vec:
+        """max_j |J_ij| of every row, as a vector with J's row layout."""
+        ai, aj, av = J.getValuesCSR()
+        v = J.createVecLeft()
+        nz = np.diff(ai) > 0
+        out = np.zeros(len(ai) - 1)
+        if av.size:
+            out[nz] = np.maximum.reduceat(np.abs(av), ai[:-1][nz])
+        v.getArray()[:] = out
+        return v
 
     def _update_row_scales(self):
         self.inv_rscale[:] = Assembler.default_inv_rscale(self.disc, self.scales)
@@ -377,12 +424,50 @@ class TimeStepper:
         ts.setMaxStepRejections(8)         # at most 8 times in a row (-ts_max_reject /
         ts.setFromOptions()                # -ts_max_step_rejections override)
         ts.setErrorIfStepFails(False)
+        if problem.model.bounds:
+            self._set_bounds(ts.getSNES())
         ts.setPostStep(self._post_step)
         self._user_monitor = monitor
         ts.setMonitor(self._monitor)
         self.rejected = 0
         self.error = None
         self._last_dt_cut = None
+
+    def _set_bounds(self, snes):
+        """Variable bounds (contact) need one of SNES's VI Newton methods."""
+        from .errors import InputError
+        if snes.getType() not in ("vinewtonrsls", "vinewtonssls"):
+            raise InputError(f"-snes_type {snes.getType()} cannot honour the contact bounds of "
+                             f"{', '.join(self.problem.model.bounds)}: use vinewtonrsls or vinewtonssls")
+        self._lower, upper = self.problem.variable_bounds()
+        snes.setVariableBounds(self._lower, upper)
+        self._bounded = self._lower.getArray() > PETSc.NINFINITY
+        self._previous = None
+        snes.setUpdate(self._release_biactive)
+
+    def _release_biactive(self, snes, it):
+        """Make PETSc's reduced-space VI Newton release a bounded unknown whose
+        last Newton step wanted to cross its bound.
+
+        ``vinewtonrsls`` fixes an unknown at its bound only if the residual
+        there is > 0.  The contact residual (the opening) does not depend on
+        the bounded traction itself, so after a step that solved a node as
+        closed (opening 0) and then projected its negative traction back to 0,
+        the residual is 0 to round-off and the node stays closed for ever.
+        Such a node (at its bound, and pushed below it by the last step) gets
+        a residual of +1e-300 (it opens: the same rule as in a primal-dual
+        active-set method); a wrong release is undone by the next step."""
+        X = snes.getSolution()
+        if it > 0 and self._previous is not None and snes.getType() == "vinewtonrsls":
+            x, lo = X.getArray(readonly=True), self._lower.getArray(readonly=True)
+            wanted = self._previous.getArray(readonly=True) - snes.getSolutionUpdate().getArray(readonly=True)
+            trapped = self._bounded & (x <= lo) & (wanted < lo)
+            if trapped.any():
+                f = snes.getFunction()[0].getArray()
+                f[trapped] = np.maximum(f[trapped], 1e-300)
+        if self._previous is None:
+            self._previous = X.duplicate()
+        X.copy(self._previous)
 
     def _post_step(self, ts):
         """Grow the step, clipped to the largest step and to the final time."""

@@ -1,0 +1,136 @@
+"""Mechanics of the fracture faces: fluid pressure and contact traction on the
+rock, the frictionless contact constraint and the hydraulic aperture
+(physics.md sections 2 and 3).
+
+Unknowns: ``u`` (matrix, discontinuous across the fracture: its traces are
+"u-" and "u+") and the contact traction ``lam`` (a fracture field, >= 0,
+compressive positive).  Normal opening g = (u+ - u-) . n with n from the -
+to the + face.
+
+* Face load (section 2: sigma . n+- = -(pf + lam) n+-, written relative to the
+  in-situ state because u is the displacement from it): with
+  P = pf + lam + sigma0_nn, sigma0_nn = n . sigma0 . n (tension positive; in
+  the in-situ state P = 0), the momentum residual gains
+
+      - int_Gamma P [[v]] . n,   [[v]] = v+ - v-.
+
+  This is the work of the net face pressure on the opening; an in-situ stress
+  with shear on the fracture plane cannot be carried by a frictionless
+  fracture and is refused by the scenes.
+
+* Contact (section 3): lam >= 0, g >= 0, lam g = 0.  The residual of the
+  ``lam`` row is the weak opening int mu g (mu the lam test function); SNES's
+  variational-inequality Newton (``-snes_type vinewtonrsls``) with the bound
+  lam >= 0 solves the complementarity: a node either has lam > 0 and
+  int mu g = 0 (closed), or lam = 0 and int mu g >= 0 (open).  There is no
+  penalty or augmentation constant: the only constants are the unknown and
+  residual scales, set from the scene's stress scale and the Jacobian
+  (``Problem.auto_residual_scales``).
+
+* Hydraulic aperture: a = ac(lam) + g, ac(lam) = max(a0 - lam/Kn, ares)
+  (g taken as max(g, 0), see ``JointLaw.aperture``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Callable, Optional
+
+import numpy as np
+
+from ..model import CellJacobian, CellResidual
+
+
+@dataclass(frozen=True)
+class FractureMechanics:
+    """Loads and contact on the fracture faces (see the module docstring)."""
+    dim: int
+    u: str = "u"
+    lam: Optional[str] = "lam"                 # contact traction field (None: no contact)
+    pf: Optional[str] = None                   # fracture pressure field, or
+    pressure: Optional[Callable] = None        # a prescribed pf(x, t) (SI), x (nc, nq, d)
+    insitu_normal_stress: float = 0.0          # sigma0_nn, tension positive
+    gap_tolerance: float = 0.0                 # m, see ``_gap_f0``
+    region: str = "fracture"
+
+
+@dataclass(frozen=True)
+class JointLaw:
+    """Linear joint law ac(lam) = max(a0 - lam/Kn, ares) (physics.md section 3)."""
+    a0: float
+    stiffness: float
+    residual: float
+
+    def closure_aperture(self, lam):
+        """(ac, d ac/d lam) for contact tractions ``lam`` (array)."""
+        a = self.a0 - lam / self.stiffness
+        above = a > self.residual
+        return np.where(above, a, self.residual), np.where(above, -1.0 / self.stiffness, 0.0)
+
+    def aperture(self, lam, g):
+        """Hydraulic aperture a = ac(lam) + max(g, 0) (g < 0 only by the VI's
+        tolerance, see ``_gap_f0``: a closed node's aperture is ac(lam) exactly)."""
+        return self.closure_aperture(lam)[0] + np.maximum(g, 0.0)
+
+
+def normals(ctx):
+    """Unit normal of each fracture face (nc, 1, d), from the - to the + face."""
+    return ctx._asm.mesh.normals[ctx._cells][:, None, :]
+
+
+def opening(fm: FractureMechanics, ctx):
+    """Normal opening g = (u+ - u-) . n at the quadrature points (nc, nq)."""
+    jump = ctx.value(fm.u + "+") - ctx.value(fm.u + "-")
+    return np.einsum("cqa,cqa->cq", jump, np.broadcast_to(normals(ctx), jump.shape))
+
+
+def net_pressure(fm: FractureMechanics, ctx):
+    """P = pf + lam + sigma0_nn (nc, nq)."""
+    P = np.full(ctx.shape, fm.insitu_normal_stress)
+    if fm.pf is not None:
+        P = P + ctx.value(fm.pf)[..., 0]
+    elif fm.pressure is not None:
+        P = P + np.broadcast_to(fm.pressure(ctx.x, ctx.t), ctx.shape)
+    if fm.lam is not None:
+        P = P + ctx.value(fm.lam)[..., 0]
+    return P
+
+
+def _face_load(fm: FractureMechanics, sign: float, ctx):
+    """-sign P n: the load on the + (sign = 1) or - (sign = -1) face's rock."""
+    return -sign * net_pressure(fm, ctx)[..., None] * normals(ctx)
+
+
+def _load_g0(sign: float, ctx):
+    """d(face load)/d(pf or lam): -sign n (nc, 1, d, 1)."""
+    return (-sign * normals(ctx))[..., None]
+
+
+def _gap_f0(fm: FractureMechanics, ctx):
+    """g + g_tol: the VI's complementarity function.  A node with lam = 0 and
+    g = 0 to round-off ("biactive") is then open; without the shift the
+    reduced-space method can keep such a node closed for ever (its Newton
+    step wants lam < 0, which the projection undoes while g stays 0).  The
+    scenes set g_tol = 1e-12 of the displacement scale: it allows that much
+    penetration, far below any tolerance."""
+    return (opening(fm, ctx) + fm.gap_tolerance)[..., None]
+
+
+def _gap_g0(sign: float, ctx):
+    """d g / d u+- = +-n (nc, 1, 1, d)."""
+    return (sign * normals(ctx))[:, :, None, :]
+
+
+def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
+    """Face loads on u+ and u-, and the contact rows of ``lam``."""
+    res, jac = [], []
+    for side, sign in (("+", 1.0), ("-", -1.0)):
+        res.append(CellResidual(fm.u + side, partial(_face_load, fm, sign), None, region=fm.region))
+        for q in (fm.pf, fm.lam):
+            if q is not None:
+                jac.append(CellJacobian(fm.u + side, q, g0=partial(_load_g0, sign), region=fm.region))
+    if fm.lam is not None:
+        res.append(CellResidual(fm.lam, partial(_gap_f0, fm), None, region=fm.region))
+        for side, sign in (("+", 1.0), ("-", -1.0)):
+            jac.append(CellJacobian(fm.lam, fm.u + side, g0=partial(_gap_g0, sign), region=fm.region))
+    return res, jac

@@ -1,0 +1,166 @@
+"""Fracture-mechanics studies (issue 4): CSV, PNG and markdown tables.
+
+    python scripts/contact_study.py [--out benchmarks/results/contact] [--study sneddon,vi] [--plot-only]
+
+* ``sneddon``: error against run time for the Griffith (2D) and penny (3D)
+  cracks, P1 and P2, three or four crack mesh sizes each: the error of the
+  opening at the centre and the relative L2 error of the opening over
+  r < 0.95 R (verification.md section 4), with each run's wall time.
+* ``vi``: ``partial_opening`` on three meshes with both VI Newton methods
+  (vinewtonrsls, vinewtonssls): Newton and Krylov iterations per step,
+  failed solves, the end of the open zone and the opening at the centre,
+  and the largest difference of the opening profile from the finest mesh.
+
+Each run is ``python -m petthm SCENE``; the study reads only the runs'
+summary.json and history.csv files.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+SNEDDON = {2: ["-thm_sneddon_dim", "2", "-thm_sneddon_radius", "50"], 3: []}
+SNEDDON_SIZES = {2: [0.1, 0.05, 0.025, 0.0125], 3: [0.2, 0.1, 0.05]}
+VI_SIZES = [0.05, 0.025, 0.0125]
+VI_METHODS = ["vinewtonrsls", "vinewtonssls"]
+
+
+def petthm(scene, out, *opts):
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out, "-thm_quiet", *map(str, opts)]
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
+    if p.returncode:
+        print(p.stdout, p.stderr, file=sys.stderr)
+        raise SystemExit(f"{' '.join(cmd)} failed")
+    hist = list(csv.DictReader(open(os.path.join(out, "history.csv"))))
+    return json.load(open(os.path.join(out, "summary.json"))), hist
+
+
+def sneddon_study(out):
+    rows = []
+    for dim in (2, 3):
+        for degree in (1, 2):
+            for h in SNEDDON_SIZES[dim]:
+                d = os.path.join(out, "runs", f"sneddon{dim}d_P{degree}_h{h}")
+                s, _ = petthm("sneddon", d, *SNEDDON[dim], "-thm_fe_degree", degree, "-thm_sneddon_crack_size", h)
+                e = s["error"]
+                rows.append({"dim": dim, "degree": degree, "crack_size_over_R": h, "cells": s["cells"],
+                             "dofs": sum(s["dofs"].values()), "wall_s": round(s["wall_time"]["total"], 2),
+                             "centre_error": e["centre_error"], "l2_error": e["opening_l2_error"]})
+                print(f"sneddon {dim}D P{degree} h={h}: {rows[-1]['wall_s']} s, centre {e['centre_error']:.2e}, "
+                      f"L2 {e['opening_l2_error']:.2e}", flush=True)
+    write_csv(os.path.join(out, "sneddon.csv"), rows)
+    return rows
+
+
+def vi_study(out):
+    rows, profiles = [], {}
+    for h in VI_SIZES:
+        for method in VI_METHODS:
+            d = os.path.join(out, "runs", f"partial_{method}_h{h}")
+            s, hist = petthm("partial_opening", d, "-thm_partial_crack_size", h, "-snes_type", method)
+            its = [int(r["snes_its"]) for r in hist[1:]]
+            kits = [int(r["ksp_its"]) for r in hist[1:]]
+            rows.append({"method": method, "crack_size_over_c": h, "steps": s["steps"],
+                         "rejected": s.get("rejected_steps", 0), "newton_per_step": " ".join(map(str, its)),
+                         "newton_max": max(its), "newton_total": sum(its), "krylov_total": sum(kits),
+                         "wall_s": round(s["wall_time"]["total"], 2), "open_length_m": s["open_length"],
+                         "opening_centre_mm": 1e3 * s["opening_centre"], "nodes_open": s["nodes_open"]})
+            profiles[(method, h)] = s["profile"]
+            print(f"partial_opening {method} h={h}: Newton {its}, open to {s['open_length']:.3f} m", flush=True)
+    finest = profiles[("vinewtonrsls", VI_SIZES[-1])]
+    xs = np.linspace(0.0, 0.99 * 50.0, 400)
+    ref = np.interp(xs, finest["x"], finest["opening"])
+    for r in rows:
+        p = profiles[(r["method"], r["crack_size_over_c"])]
+        r["profile_diff_to_finest_mm"] = 1e3 * float(np.abs(np.interp(xs, p["x"], p["opening"]) - ref).max())
+    write_csv(os.path.join(out, "partial_opening.csv"), rows)
+    return rows
+
+
+def write_csv(path, rows):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def read_csv(path):
+    return list(csv.DictReader(open(path)))
+
+
+def plot_sneddon(out, rows):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for ax, key, title in zip(axes, ("centre_error", "l2_error"), ("opening at the centre", "opening, L2 over r < 0.95 R")):
+        for dim in ("2", "3"):
+            for deg, mk in (("1", "s--"), ("2", "o-")):
+                sel = [r for r in rows if str(r["dim"]) == dim and str(r["degree"]) == deg]
+                ax.loglog([float(r["wall_s"]) for r in sel], [float(r[key]) for r in sel], mk,
+                          label=f"{dim}D P{deg}")
+        ax.axhline(2e-2 if key == "centre_error" else 3e-2, color="grey", lw=0.8, ls=":")
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("relative error")
+        ax.set_title(title)
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "sneddon_work_precision.png"), dpi=120)
+
+
+def markdown(out, sneddon_rows, vi_rows):
+    lines = []
+    if sneddon_rows:
+        lines += ["| crack | P | h/R | cells | dofs | wall (s) | w(0) error | L2 error |", "|---|---|---|---|---|---|---|---|"]
+        for r in sneddon_rows:
+            name = "Griffith 2D" if str(r["dim"]) == "2" else "penny 3D"
+            lines.append(f"| {name} | {r['degree']} | {r['crack_size_over_R']} | {r['cells']} | {r['dofs']} | "
+                         f"{float(r['wall_s']):.2f} | {float(r['centre_error']):.2e} | {float(r['l2_error']):.2e} |")
+        lines.append("")
+    if vi_rows:
+        lines += ["| method | h/c | Newton per step | max | Krylov total | rejected | wall (s) | open to (m) | "
+                  "w(0) (mm) | profile diff to finest (mm) |", "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in vi_rows:
+            lines.append(f"| {r['method']} | {r['crack_size_over_c']} | {r['newton_per_step']} | {r['newton_max']} | "
+                         f"{r['krylov_total']} | {r['rejected']} | {float(r['wall_s']):.2f} | "
+                         f"{float(r['open_length_m']):.3f} | {float(r['opening_centre_mm']):.4f} | "
+                         f"{float(r['profile_diff_to_finest_mm']):.2e} |")
+    with open(os.path.join(out, "tables.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "contact"))
+    ap.add_argument("--study", default="sneddon,vi")
+    ap.add_argument("--plot-only", action="store_true")
+    a = ap.parse_args(argv)
+    studies = a.study.split(",")
+    os.makedirs(a.out, exist_ok=True)
+    sn = os.path.join(a.out, "sneddon.csv")
+    vi = os.path.join(a.out, "partial_opening.csv")
+    if not a.plot_only:
+        if "sneddon" in studies:
+            sneddon_study(a.out)
+        if "vi" in studies:
+            vi_study(a.out)
+    sn_rows = read_csv(sn) if os.path.exists(sn) else []
+    vi_rows = read_csv(vi) if os.path.exists(vi) else []
+    if sn_rows:
+        plot_sneddon(a.out, sn_rows)
+    markdown(a.out, sn_rows, vi_rows)
+
+
+if __name__ == "__main__":
+    main()
