@@ -28,6 +28,10 @@ _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "
                  "check_pointer_intensity", "viewer_binary", "history", "options_monitor", "mpi_")
 
 
+#: a solver recipe may set the split of a field the scene does not have
+_RECIPE_SPLITS = tuple(f"fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam"))
+
+
 def _say(comm, msg):
     if comm.rank == 0:
         print(msg, flush=True)
@@ -37,7 +41,7 @@ def check_unused_petsc_options() -> None:
     """Raise InputError naming the first option nothing has read (a misspelling)."""
     from .solver import PROPOSED
     left = [o for o in compat.unused_options()
-            if not o.startswith(_LATE_OPTIONS) and o not in PROPOSED]
+            if not o.startswith(_LATE_OPTIONS + _RECIPE_SPLITS) and o not in PROPOSED]
     if left:
         raise InputError(f"option -{left[0]} was not used by any solver or petthm component "
                          "(misspelt, or not valid for this scene)")

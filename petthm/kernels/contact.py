@@ -134,3 +134,101 @@ def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
         for side, sign in (("+", 1.0), ("-", -1.0)):
             jac.append(CellJacobian(fm.lam, fm.u + side, g0=partial(_gap_g0, sign), region=fm.region))
     return res, jac
+
+
+# -- flow in a deformable fracture (physics.md section 4) ----------------------------------
+@dataclass(frozen=True)
+class DeformableFlow:
+    """Cubic-law flow with the aperture of the joint law and the opening:
+
+        da/dt + a c_f dpf/dt - div( a^3/(12 mu) grad pf ) = 0   (+ wells)
+
+    a = ac(lam) + max(g, 0), so da/dt = ac'(lam) dlam/dt + H(g) dg/dt (the
+    chain rule; exact for any time integrator).  Isothermal, constant
+    viscosity.  Weak form: int w (da/dt + a c_f pdot) + grad w . (a^3/(12 mu)) grad p."""
+    mech: FractureMechanics
+    law: JointLaw
+    compressibility: float
+    viscosity: float
+    p: str = "pf"
+
+
+def _aperture_state(fl: DeformableFlow, ctx):
+    """(a, d a/d lam, H(g), d a/dt) at the quadrature points (nc, nq)."""
+    key = ("aperture", id(fl))
+    if key not in ctx._cache:
+        m = fl.mech
+        lam = ctx.value(m.lam)[..., 0]
+        g = opening(m, ctx)
+        ac, dac = fl.law.closure_aperture(lam)
+        H = (g > 0).astype(float)
+        n = np.broadcast_to(normals(ctx), ctx.value(m.u + "+").shape)
+        gdot = np.einsum("cqa,cqa->cq", ctx.dot(m.u + "+") - ctx.dot(m.u + "-"), n)
+        adot = dac * ctx.dot(m.lam)[..., 0] + H * gdot
+        ctx._cache[key] = (ac + H * g, dac, H, adot)
+    return ctx._cache[key]
+
+
+def _dflow_f0(fl: DeformableFlow, ctx):
+    a, _, _, adot = _aperture_state(fl, ctx)
+    return (adot + a * fl.compressibility * ctx.dot(fl.p)[..., 0])[..., None]
+
+
+def _dflow_f1(fl: DeformableFlow, ctx):
+    a, _, _, _ = _aperture_state(fl, ctx)
+    return (a ** 3 / (12 * fl.viscosity))[..., None, None] * ctx.grad(fl.p)
+
+
+def _dflow_g0_pp(fl: DeformableFlow, ctx):
+    a, _, _, _ = _aperture_state(fl, ctx)
+    return (a * fl.compressibility * ctx.shift)[..., None, None]
+
+
+def _dflow_g3_pp(fl: DeformableFlow, ctx):
+    a, _, _, _ = _aperture_state(fl, ctx)
+    d = ctx.dim
+    return (a ** 3 / (12 * fl.viscosity))[..., None, None, None, None] * np.eye(d)[None, None, None, :, None, :]
+
+
+def _da_sensitivity(fl: DeformableFlow, ctx):
+    """d(f0)/d(a) per unit change of a (shift from a-dot, c_f pdot from storage) and d(f1)/d(a)."""
+    a, _, _, _ = _aperture_state(fl, ctx)
+    s0 = ctx.shift + fl.compressibility * ctx.dot(fl.p)[..., 0]
+    s1 = (3 * a ** 2 / (12 * fl.viscosity))[..., None] * ctx.grad(fl.p)[:, :, 0, :]      # (nc, nq, d)
+    return s0, s1
+
+
+def _dflow_g0_plam(fl: DeformableFlow, ctx):
+    _, dac, _, _ = _aperture_state(fl, ctx)
+    s0, _ = _da_sensitivity(fl, ctx)
+    return (dac * s0)[..., None, None]
+
+
+def _dflow_g2_plam(fl: DeformableFlow, ctx):
+    _, dac, _, _ = _aperture_state(fl, ctx)
+    _, s1 = _da_sensitivity(fl, ctx)
+    return (dac[..., None] * s1)[:, :, None, :, None]
+
+
+def _dflow_g0_pu(fl: DeformableFlow, sign: float, ctx):
+    _, _, H, _ = _aperture_state(fl, ctx)
+    s0, _ = _da_sensitivity(fl, ctx)
+    return (sign * H * s0)[..., None, None] * normals(ctx)[:, :, None, :]
+
+
+def _dflow_g2_pu(fl: DeformableFlow, sign: float, ctx):
+    _, _, H, _ = _aperture_state(fl, ctx)
+    _, s1 = _da_sensitivity(fl, ctx)
+    return sign * (H[..., None] * s1)[:, :, None, :, None] * normals(ctx)[:, :, None, None, :]
+
+
+def deformable_flow_terms(fl: DeformableFlow) -> tuple[list, list]:
+    """Residual and Jacobian of the fracture flow with a = a(lam, g)."""
+    m, reg = fl.mech, fl.mech.region
+    res = [CellResidual(fl.p, partial(_dflow_f0, fl), partial(_dflow_f1, fl), region=reg)]
+    jac = [CellJacobian(fl.p, fl.p, g0=partial(_dflow_g0_pp, fl), g3=partial(_dflow_g3_pp, fl), region=reg),
+           CellJacobian(fl.p, m.lam, g0=partial(_dflow_g0_plam, fl), g2=partial(_dflow_g2_plam, fl), region=reg)]
+    for side, sign in (("+", 1.0), ("-", -1.0)):
+        jac.append(CellJacobian(fl.p, m.u + side, g0=partial(_dflow_g0_pu, fl, sign),
+                                g2=partial(_dflow_g2_pu, fl, sign), region=reg))
+    return res, jac

@@ -409,3 +409,78 @@ class PartialOpening(MechanicsScene):
     def report(self, problem, t):
         x, g, lam = self._profile
         return dict(self._last, profile={"x": x.tolist(), "opening": g.tolist(), "lam": lam.tolist()})
+
+
+# -- fracture_inflation --------------------------------------------------------------------
+@dataclass(frozen=True)
+class InflationParams:
+    """Fluid injected into a closed crack under compression (fracture_inflation)"""
+    inflation_rate: float = param(1e-5, "m2/s", "injection rate into the half model (per metre)", lo=0.0, lo_open=True)
+    inflation_compressibility: float = param(0.0, "1/Pa", "fluid compressibility c_f", lo=0.0)
+    inflation_viscosity: float = param(1e-3, "Pa s", "fluid viscosity", lo=0.0, lo_open=True)
+
+
+@register
+class FractureInflation(PartialOpening):
+    name = "fracture_inflation"
+    description = "water injected at the centre of a closed crack: aperture from contact and opening, da/dt"
+    parameter_sets = (ElasticRock, Joint, with_defaults(PartialOpeningParams, partial_crack_size=0.05),
+                      InflationParams)
+    time = TimeDefaults(final_time=2000.0, dt_initial=10.0, dt_growth=1.1, dt_max=100.0, mesh_size=0.0)
+    history_columns = ("injection_pressure", "opening_centre", "nodes_open", "volume_balance")
+
+    def pressure(self, x, t):          # the pressure is the field pf here
+        raise NotImplementedError
+
+    def build(self, mesh, degree):
+        from ..kernels import wells
+        p, fl = self[PartialOpeningParams], self[InflationParams]
+        if mesh.dim != 2:
+            raise InputError("fracture_inflation is a 2D scene (the mesh is 3D)")
+        if not p.partial_pressure < p.partial_normal_stress:
+            raise InputError("option -thm_partial_pressure must be below -thm_partial_normal_stress (closed)")
+        rock = self[ElasticRock]
+        el = pe.Elastic(rock.rock_youngs_modulus, rock.rock_poisson_ratio, 2)
+        sn = p.partial_normal_stress
+        w_ref = 4 * (1 - rock.rock_poisson_ratio ** 2) * sn / rock.rock_youngs_modulus * p.partial_half_length
+        self.mech = ct.FractureMechanics(2, pf="pf", insitu_normal_stress=-sn, gap_tolerance=GAP_TOLERANCE * w_ref)
+        self.law = self[Joint].law()
+        self.flow = ct.DeformableFlow(self.mech, self.law, fl.inflation_compressibility, fl.inflation_viscosity)
+        res, jac = pe.elastic_terms(el)
+        for r, j in (ct.fracture_mechanics_terms(self.mech), ct.deformable_flow_terms(self.flow)):
+            res, jac = res + r, jac + j
+        fields = [FieldSpec("u", 2, degree), FieldSpec("lam", 1, 1, "fracture"), FieldSpec("pf", 1, degree, "fracture")]
+        model = Model(fields, res, jac, bounds={"lam": (0.0, None)})
+        model.points.append(wells.injector((0.0, 0.0), fl.inflation_rate, 0.0, None, T=None))
+        bcs = [Dirichlet("u", "far", lambda x, t: np.zeros((len(x), 2))),
+               Dirichlet("u", "sym_x", zero, components=(0,)),
+               Dirichlet("lam", TIP_BC, zero)]
+        scales = {"u": FieldScale(w_ref), "lam": FieldScale(sn), "pf": FieldScale(sn, p.partial_pressure)}
+        lam0 = sn - p.partial_pressure
+        self._a0 = None
+        return model, bcs, scales, {"lam": lambda x: np.full(len(x), lam0),
+                                    "pf": lambda x: np.full(len(x), p.partial_pressure)}
+
+    def fluid_volume(self, problem, X, t):
+        """int a over the crack (m2 per metre, half model)."""
+        xl, _ = problem.local_arrays(X or problem.X, t)
+
+        def a(ctx):
+            lam = ctx.value("lam")[..., 0]
+            return self.law.aperture(lam, ct.opening(self.mech, ctx))
+        return problem.region("fracture").integrate(xl, a, t)
+
+    def monitors(self, problem, t, X=None):
+        out = super().monitors(problem, t, X)
+        vol = self.fluid_volume(problem, X, t)
+        if self._a0 is None:
+            self._a0 = vol
+        injected = self[InflationParams].inflation_rate * t
+        out = {"injection_pressure": problem.point_value("pf", (0.0, 0.0), X, t),
+               "opening_centre": out["opening_centre"], "nodes_open": out["nodes_open"],
+               "volume_balance": (vol - self._a0 - injected) / injected if t > 0 else 0.0}
+        self._last = dict(self._last, **out)
+        return out
+
+    def report(self, problem, t):
+        return dict(self._last)
