@@ -68,6 +68,17 @@ def _gather(comm, a: np.ndarray) -> np.ndarray:
     return np.concatenate(parts) if parts else a
 
 
+def crack_half_model(path, c, L, crack_size, size=0.0, vertices=()):
+    """[0, L] x [-L, L] with a crack from (0, 0) to (c, 0) (the half model of a
+    crack of length 2c, symmetric about x = 0), mesh size ``crack_size`` on the
+    crack growing by a third of the distance to ``size`` (default L/10);
+    ``vertices``: extra mesh vertices on the crack."""
+    size = size or L / 10
+    fr = [meshing.Fracture("segment", p0=(0.0, 0.0), p1=(c, 0.0), size=crack_size)]
+    return meshing.box_with_fractures(path, [L, 2 * L], size, fr, grading_distance=3 * size, origin=(0.0, -L),
+                                      wells=list(vertices), well_size=crack_size)
+
+
 class MechanicsScene(Scene):
     """Shared set-up: elastic rock, faces loaded by a prescribed pressure, contact."""
     fractured = True
@@ -146,14 +157,11 @@ class Sneddon(MechanicsScene):
         p = self[SneddonParams]
         R, L = p.sneddon_radius, self.L
         hf = p.sneddon_crack_size * R
-        size = size or L / 10
-        grade = 3 * size             # the size grows by a third of the distance from the crack
         if p.sneddon_dim == 2:
-            fr = [meshing.Fracture("segment", p0=(0.0, 0.0), p1=(R, 0.0), size=hf)]
-            return meshing.box_with_fractures(path, [L, 2 * L], size, fr, grading_distance=grade,
-                                              origin=(0.0, -L))
+            return crack_half_model(path, R, L, hf, size)
+        size = size or L / 10
         fr = [meshing.Fracture("disc", center=(0.0, 0.0, 0.0), radius=R, size=hf)]
-        return meshing.box_with_fractures(path, [L, L, 2 * L], size, fr, grading_distance=grade,
+        return meshing.box_with_fractures(path, [L, L, 2 * L], size, fr, grading_distance=3 * size,
                                           origin=(0.0, 0.0, -L))
 
     def exact_opening(self, r):
@@ -356,11 +364,8 @@ class PartialOpening(MechanicsScene):
         p = self[PartialOpeningParams]
         c = p.partial_half_length
         L = p.partial_box * c
-        size = size or L / 10
-        fr = [meshing.Fracture("segment", p0=(0.0, 0.0), p1=(c, 0.0), size=p.partial_crack_size * c)]
         edge = [(p.partial_radius * c, 0.0)]          # a vertex where the pressure jumps
-        return meshing.box_with_fractures(path, [L, 2 * L], size, fr, grading_distance=3 * size, origin=(0.0, -L),
-                                          wells=edge, well_size=p.partial_crack_size * c)
+        return crack_half_model(path, c, L, p.partial_crack_size * c, size, edge)
 
     def pressure(self, x, t):
         p = self[PartialOpeningParams]
