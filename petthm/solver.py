@@ -52,10 +52,12 @@ def direct_solver_defaults(comm) -> dict[str, str]:
         if PETSc.Sys.hasExternalPackage(package):
             return dict(out, pc_type="lu", pc_factor_mat_solver_type=package)
     # PETSc's own LU does not pivot: rows with a zero diagonal (the contact
-    # multipliers) are first swapped with rows that have a non-zero there
+    # multipliers) are first swapped with rows that have a non-zero there, and
+    # a zero pivot that still occurs is shifted (GMRES corrects the inexact LU)
+    lu = {"pc_factor_nonzeros_along_diagonal": "", "pc_factor_shift_type": "nonzero"}
     if comm.size == 1:
-        return dict(out, pc_type="lu", pc_factor_nonzeros_along_diagonal="")
-    return dict(out, pc_type="redundant", redundant_pc_type="lu", redundant_pc_factor_nonzeros_along_diagonal="")
+        return dict(out, pc_type="lu", **lu)
+    return dict(out, pc_type="redundant", redundant_pc_type="lu", **{"redundant_" + k: v for k, v in lu.items()})
 
 
 #: option names petthm inserted itself (never reported as unused)

@@ -85,7 +85,9 @@ class MechanicsScene(Scene):
     direct_solve = True
 
     def solver_defaults(self, comm):
-        return dict(super().solver_defaults(comm), snes_type="vinewtonrsls")
+        # snes_atol 1e-12: one more Newton step (an iterative refinement) where
+        # the LU is less accurate than MUMPS (PETSc's own LU with reordering)
+        return dict(super().solver_defaults(comm), snes_type="vinewtonrsls", snes_atol="1e-12")
 
     def mechanics_model(self, mesh, degree, pressure, normal_stress: float, u_scale: float) -> Model:
         """Fields u (``degree``) and lam (P1 on the fracture), the elastic
