@@ -244,17 +244,22 @@ class Problem:
             out.append((name, iset))
         return out
 
-    def rigid_body_modes(self, iset: PETSc.IS) -> PETSc.NullSpace:
+    def rigid_body_modes(self, iset: PETSc.IS, space: np.ndarray | None = None) -> PETSc.NullSpace:
         """Translations and rotations of the u unknowns in ``iset`` (owned,
-        sorted global indices; components fixed by rollers are absent, so the
-        vectors are built per unknown, not with a block size), orthonormalised."""
+        sorted indices; components fixed by rollers are absent, so the
+        vectors are built per unknown, not with a block size), orthonormalised.
+        ``space``: the sorted global unknowns that ``iset`` numbers (a reduced
+        space, e.g. the inactive set of a VI solve); default: all."""
         d = self.disc.mesh.dim
         dofs = self.disc.field_local_dofs("u")                      # (n, d) local
         x = self.disc.field_node_coordinates("u")
         x = x - x.mean(axis=0) if len(x) else x
         gidx = self.disc.global_index[dofs]
         own = self.disc._owned(gidx) & ~np.isin(dofs, self._constrained_local())
-        rows = np.searchsorted(iset.getIndices(), gidx[own])
+        if space is not None:
+            own &= np.isin(gidx, space)
+        target = gidx[own] if space is None else np.searchsorted(space, gidx[own]) + self._space_offset(space)
+        rows = np.searchsorted(iset.getIndices(), target)
         comp = np.broadcast_to(np.arange(d), dofs.shape)[own]
         xs = np.broadcast_to(x[:, None, :], dofs.shape + (d,))[own]
         modes = [np.asarray(comp == k, dtype=float) for k in range(d)]
@@ -273,6 +278,25 @@ class Problem:
                 v.scale(1.0 / nv)
                 vecs.append(v)
         return PETSc.NullSpace().create(vectors=vecs, comm=self.dm.comm)
+
+    def _space_offset(self, space: np.ndarray) -> int:
+        """First row of this rank in a reduced space of which it holds ``space``."""
+        comm = self.dm.comm.tompi4py()
+        return comm.exscan(len(space)) or 0
+
+    def reduced_field_splits(self, space: np.ndarray) -> list[tuple[str, PETSc.IS]]:
+        """``field_splits`` restricted to the sorted global unknowns ``space``
+        (this rank's part), numbered in the reduced space."""
+        offset = self._space_offset(space)
+        out = []
+        for name, iset in self.field_splits():
+            idx = iset.getIndices()
+            pos = np.searchsorted(space, idx[np.isin(idx, space)]) + offset
+            sub = PETSc.IS().createGeneral(pos.astype(compat.INT), comm=self.dm.comm)
+            if name == "u":
+                sub.compose("nearnullspace", self.rigid_body_modes(sub, space))
+            out.append((name, sub))
+        return out
 
     def _constrained_local(self) -> np.ndarray:
         """Local dofs held by Dirichlet constraints or ties (not unknowns)."""
@@ -487,7 +511,11 @@ class TimeStepper:
         """A field-split preconditioner gets one split per field, named by the
         field (-fieldsplit_u_..., -fieldsplit_pm_...), with the rigid-body
         modes on u, unless the options group fields themselves
-        (-pc_fieldsplit_0_fields ...)."""
+        (-pc_fieldsplit_0_fields ...).  The Python PC ``VIFieldSplit`` is
+        given the problem and the SNES (it splits the VI's reduced system)."""
+        if pc.getType() == "python":
+            VIFieldSplit.solving = (self.problem, self.ts.getSNES())
+            return
         if pc.getType() != "fieldsplit" or PETSc.Options().hasName("pc_fieldsplit_0_fields"):
             return
         pc.setFieldSplitIS(*self.problem.field_splits())
@@ -565,3 +593,52 @@ class TimeStepper:
 
     def iterations(self) -> tuple[int, int]:
         return self.ts.getSNESIterations(), self.ts.getKSPIterations()
+
+
+class VIFieldSplit:
+    """Field split for the reduced systems of PETSc's VI Newton methods
+    (``-pc_type python -pc_python_type petthm.solver.VIFieldSplit``).
+
+    ``vinewtonrsls`` solves on the inactive set, which changes with the
+    contact state; a PCFIELDSPLIT set up once would keep index sets of the
+    wrong space (petsc-notes "Contact and SNES VI").  This PC rebuilds an
+    inner PCFIELDSPLIT at every set-up: one split per field restricted to
+    ``SNES.getVIInactiveSet()`` (all unknowns for ``vinewtonssls``), named by
+    the field, the rigid-body modes on u.  The inner PC takes its options
+    with the prefix ``vi_`` (``-vi_pc_fieldsplit_type schur``,
+    ``-vi_fieldsplit_u_pc_type gamg``, ...)."""
+
+    #: (Problem, SNES) of the solve in progress, set by ``TimeStepper`` (PETSc
+    #: may create a new instance of this class whenever it reads the options)
+    solving: tuple | None = None
+
+    def __init__(self):
+        self.inner = None
+
+    def setUp(self, pc):
+        A, P = pc.getOperators()
+        if self.solving is None:
+            raise RuntimeError("VIFieldSplit is set up by petthm's TimeStepper only")
+        problem, snes = self.solving
+        space = None
+        if snes.getType() == "vinewtonrsls" and P.getSize()[0] != problem.X.getSize():
+            space = np.asarray(snes.getVIInactiveSet().getIndices(), dtype=compat.INT)
+        splits = problem.field_splits() if space is None else problem.reduced_field_splits(space)
+        splits = [(n, s) for n, s in splits if s.getSize() > 0]
+        if self.inner is not None:
+            self.inner.destroy()
+        self.inner = PETSc.PC().create(comm=pc.getComm())
+        self.inner.setOptionsPrefix((pc.getOptionsPrefix() or "") + "vi_")
+        self.inner.setOperators(A, P)
+        self.inner.setType("fieldsplit")
+        self.inner.setFieldSplitIS(*splits)
+        self.inner.setFromOptions()
+        self.inner.setUp()
+
+    def reset(self, pc):
+        if self.inner is not None:
+            self.inner.destroy()
+            self.inner = None
+
+    def apply(self, pc, x, y):
+        self.inner.apply(x, y)

@@ -39,3 +39,21 @@ def test_fieldsplit_recipe_matches_the_direct_solve(tmp_path):
                 for a, b in zip(h1[1:], h2[1:]) for k in keys if a[k] and b[k])
     print("recipe vs direct", worst, "Krylov", s2["ksp_iterations"], "per step", s2["ksp_iterations"] / s2["steps"])
     assert len(h1) == len(h2) and worst <= 1e-7
+
+
+def test_vi_fieldsplit_follows_the_active_set(tmp_path):
+    """partial_opening with the contact recipe (Python PC rebuilding the
+    splits on the inactive set of vinewtonrsls; the full space for
+    vinewtonssls): converges in <= 15 Newton iterations per step with both
+    methods, on 1 and 2 ranks, to the state of the direct solve."""
+    recipe = ("-options_file", f"{ROOT}/options/solvers/fieldsplit_contact.opts", "-thm_partial_crack_size", 0.05)
+    _, ref = run_petthm("partial_opening", tmp_path / "direct", "-thm_partial_crack_size", 0.05)
+    runs = [("vinewtonrsls", 1), ("vinewtonssls", 1), ("vinewtonrsls", 2)]
+    for method, ranks in runs:
+        out = tmp_path / f"{method}_{ranks}"
+        _, s = run_petthm("partial_opening", out, *recipe, "-snes_type", method, ranks=ranks)
+        its = [int(r["snes_its"]) for r in csv.DictReader(open(out / "history.csv"))][1:]
+        print(method, ranks, "Newton", its, "Krylov", s["ksp_iterations"])
+        assert s["status"] == "completed" and max(its) <= 15
+        assert s["open_length"] == ref["open_length"] and s["nodes_open"] == ref["nodes_open"]
+        assert abs(s["opening_centre"] - ref["opening_centre"]) <= 1e-6 * ref["opening_centre"]
