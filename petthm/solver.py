@@ -232,24 +232,32 @@ class Problem:
         self.dm.localToGlobal(hi, XU, addv=PETSc.InsertMode.INSERT_VALUES)
         return XL, XU
 
-    def field_splits(self) -> list[tuple[str, PETSc.IS]]:
+    def field_splits(self, space: np.ndarray | None = None) -> list[tuple[str, PETSc.IS]]:
         """(field name, sorted global indices) of every field, the rigid-body
         modes of ``u`` composed on its index set as "nearnullspace" (for
-        GAMG on the displacement block, petsc-notes "Field split")."""
+        GAMG on the displacement block, petsc-notes "Field split").
+        ``space``: this rank's part of the sorted global unknowns of a reduced
+        system (the inactive set of a VI solve); the index sets are then
+        restricted to it and numbered in the reduced system."""
         names, isets, _ = self.dm.createFieldDecomposition()
+        offset = 0 if space is None else self._space_offset(space)
         out = []
         for name, iset in zip(names, isets):
+            if space is not None:
+                idx = iset.getIndices()
+                pos = np.searchsorted(space, idx[np.isin(idx, space)]) + offset
+                iset = PETSc.IS().createGeneral(pos.astype(compat.INT), comm=self.dm.comm)
             if name == "u":
-                iset.compose("nearnullspace", self.rigid_body_modes(iset))
+                iset.compose("nearnullspace", self.rigid_body_modes(iset, space, offset))
             out.append((name, iset))
         return out
 
-    def rigid_body_modes(self, iset: PETSc.IS, space: np.ndarray | None = None) -> PETSc.NullSpace:
+    def rigid_body_modes(self, iset: PETSc.IS, space: np.ndarray | None = None, offset: int = 0) -> PETSc.NullSpace:
         """Translations and rotations of the u unknowns in ``iset`` (owned,
         sorted indices; components fixed by rollers are absent, so the
         vectors are built per unknown, not with a block size), orthonormalised.
-        ``space``: the sorted global unknowns that ``iset`` numbers (a reduced
-        space, e.g. the inactive set of a VI solve); default: all."""
+        ``space``, ``offset``: the reduced system ``iset`` numbers (see
+        ``field_splits``); default: all unknowns."""
         d = self.disc.mesh.dim
         dofs = self.disc.field_local_dofs("u")                      # (n, d) local
         x = self.disc.field_node_coordinates("u")
@@ -258,7 +266,7 @@ class Problem:
         own = self.disc._owned(gidx) & ~np.isin(dofs, self._constrained_local())
         if space is not None:
             own &= np.isin(gidx, space)
-        target = gidx[own] if space is None else np.searchsorted(space, gidx[own]) + self._space_offset(space)
+        target = gidx[own] if space is None else np.searchsorted(space, gidx[own]) + offset
         rows = np.searchsorted(iset.getIndices(), target)
         comp = np.broadcast_to(np.arange(d), dofs.shape)[own]
         xs = np.broadcast_to(x[:, None, :], dofs.shape + (d,))[own]
@@ -280,23 +288,8 @@ class Problem:
         return PETSc.NullSpace().create(vectors=vecs, comm=self.dm.comm)
 
     def _space_offset(self, space: np.ndarray) -> int:
-        """First row of this rank in a reduced space of which it holds ``space``."""
-        comm = self.dm.comm.tompi4py()
-        return comm.exscan(len(space)) or 0
-
-    def reduced_field_splits(self, space: np.ndarray) -> list[tuple[str, PETSc.IS]]:
-        """``field_splits`` restricted to the sorted global unknowns ``space``
-        (this rank's part), numbered in the reduced space."""
-        offset = self._space_offset(space)
-        out = []
-        for name, iset in self.field_splits():
-            idx = iset.getIndices()
-            pos = np.searchsorted(space, idx[np.isin(idx, space)]) + offset
-            sub = PETSc.IS().createGeneral(pos.astype(compat.INT), comm=self.dm.comm)
-            if name == "u":
-                sub.compose("nearnullspace", self.rigid_body_modes(sub, space))
-            out.append((name, sub))
-        return out
+        """First row of this rank in a reduced system of which it holds ``space``."""
+        return self.dm.comm.tompi4py().exscan(len(space)) or 0
 
     def _constrained_local(self) -> np.ndarray:
         """Local dofs held by Dirichlet constraints or ties (not unknowns)."""
@@ -623,7 +616,7 @@ class VIFieldSplit:
         space = None
         if snes.getType() == "vinewtonrsls" and P.getSize()[0] != problem.X.getSize():
             space = np.asarray(snes.getVIInactiveSet().getIndices(), dtype=compat.INT)
-        splits = problem.field_splits() if space is None else problem.reduced_field_splits(space)
+        splits = problem.field_splits(space)
         splits = [(n, s) for n, s in splits if s.getSize() > 0]
         if self.inner is not None:
             self.inner.destroy()

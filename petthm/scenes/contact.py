@@ -31,6 +31,7 @@ from ..model import Model
 from ..params import param
 from ..solver import Dirichlet
 from .base import Scene, TimeDefaults, register, with_defaults
+from .fracture import _max
 
 
 # -- parameters ------------------------------------------------------------------------
@@ -227,11 +228,6 @@ class Sneddon(MechanicsScene):
         return {"error": {k: e.get(k) for k in ("centre_error", "opening_l2_error")},
                 "opening_centre": e.get("opening_centre"),
                 "opening_centre_exact": float(self.exact_opening(np.zeros(1))[0])}
-
-
-def _max():
-    from mpi4py import MPI
-    return MPI.MAX
 
 
 def _minloc():
@@ -435,9 +431,6 @@ class FractureInflation(PartialOpening):
                       InflationParams)
     time = TimeDefaults(final_time=2000.0, dt_initial=10.0, dt_growth=1.1, dt_max=100.0, mesh_size=0.0)
     history_columns = ("injection_pressure", "opening_centre", "nodes_open", "volume_balance")
-
-    def pressure(self, x, t):          # the pressure is the field pf here
-        raise NotImplementedError
 
     def build(self, mesh, degree):
         from ..kernels import wells
