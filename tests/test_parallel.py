@@ -92,3 +92,26 @@ def test_contact_scene_parallel_matches_serial(tmp_path, scene, opts, keys):
     field = np.abs(np.sort(u2, axis=0) - np.sort(u1, axis=0)).max() / np.abs(u1).max()
     print(f"{scene}: 2 ranks vs serial: summary {worst:.1e}, final u {field:.1e}")
     assert worst <= 1e-8 and field <= 1e-8
+
+
+@pytest.mark.parallel
+def test_scene2_parallel_matches_serial(tmp_path):
+    """A coarse Scene 2 (layered mesh; u, lam, pf, Tf, Tm with contact, mu(T)
+    and thermal strain) to 1e6 s: the well and contact histories and the final rock
+    temperature on 2 ranks equal the serial run to 1e-8."""
+    opts = ("-thm_fe_degree", 1, "-thm_scene2_fracture_size", 20, "-thm_scene2_well_size", 10,
+            "-thm_scene2_layer", 2, "-thm_scene2_layer_growth", 2.5, "-thm_mesh_size", 150, "-thm_final_time", 1e6)
+    runs = {}
+    for n in (1, 2):
+        _, s = run_petthm("penny_impermeable", tmp_path / f"n{n}", *opts, ranks=n, timeout=900)
+        assert s["status"] == "completed" and s["ranks"] == n
+        runs[n] = (s, _history(tmp_path / f"n{n}"), final_field(tmp_path / f"n{n}"))
+    (s1, h1, (x1, v1)), (s2, h2, (x2, v2)) = runs[1], runs[2]
+    assert s1["dofs"] == s2["dofs"] and len(h1) == len(h2)
+    keys = ("injection_pressure", "production_temperature", "lam_injector", "aperture_injector", "lam_min")
+    worst = max(abs(float(a[k]) - float(b[k])) / max(abs(float(a[k])), 1e-300)
+                for a, b in zip(h1, h2) for k in keys)
+    assert np.allclose(x1, x2, rtol=0, atol=1e-9)
+    field = np.abs(v2 - v1).max() / np.abs(v1).max()
+    print(f"penny_impermeable: 2 ranks vs serial: histories {worst:.1e}, final Tm {field:.1e}")
+    assert worst <= 1e-8 and field <= 1e-8

@@ -136,99 +136,63 @@ def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
     return res, jac
 
 
-# -- flow in a deformable fracture (physics.md section 4) ----------------------------------
+# -- the aperture of a deformable fracture (physics.md sections 3, 4 and 7) -------------------
 @dataclass(frozen=True)
-class DeformableFlow:
-    """Cubic-law flow with the aperture of the joint law and the opening:
+class ApertureState:
+    """The hydraulic aperture and its derivatives at the quadrature points (nc, nq)."""
+    a: np.ndarray          # a = ac(lam) + H(g) g
+    dlam: np.ndarray       # d a / d lam = ac'(lam)
+    H: np.ndarray          # d a / d g = H(g)
+    adot: np.ndarray       # d a / dt = ac' dlam/dt + H dg/dt
 
-        da/dt + a c_f dpf/dt - div( a^3/(12 mu) grad pf ) = 0   (+ wells)
 
-    a = ac(lam) + max(g, 0), so da/dt = ac'(lam) dlam/dt + H(g) dg/dt (the
-    chain rule; exact for any time integrator).  Isothermal, constant
-    viscosity.  Weak form: int w (da/dt + a c_f pdot) + grad w . (a^3/(12 mu)) grad p."""
+@dataclass(frozen=True)
+class Aperture:
+    """a(lam, g) = ac(lam) + max(g, 0) of a fracture with contact: the
+    aperture that ``transport.Flow`` and ``transport.Heat`` multiply their
+    per-unit-aperture coefficients by (storage a c_f, a beta_f, permeability
+    a^3/12, capacity a rho_f C_f, conductivity a lambda_f).  da/dt is the chain
+    rule ac'(lam) dlam/dt + H(g) dg/dt, exact for any time integrator away from
+    the kinks of a."""
     mech: FractureMechanics
     law: JointLaw
-    compressibility: float
-    viscosity: float
-    p: str = "pf"
 
+    def state(self, ctx) -> ApertureState:
+        key = ("aperture", id(self))
+        if key not in ctx._cache:
+            m = self.mech
+            lam = ctx.value(m.lam)[..., 0]
+            g = opening(m, ctx)
+            ac, dac = self.law.closure_aperture(lam)
+            H = (g > 0).astype(float)
+            n = np.broadcast_to(normals(ctx), ctx.value(m.u + "+").shape)
+            gdot = np.einsum("cqa,cqa->cq", ctx.dot(m.u + "+") - ctx.dot(m.u + "-"), n)
+            ctx._cache[key] = ApertureState(ac + H * g, dac, H, dac * ctx.dot(m.lam)[..., 0] + H * gdot)
+        return ctx._cache[key]
 
-def _aperture_state(fl: DeformableFlow, ctx):
-    """(a, d a/d lam, H(g), d a/dt) at the quadrature points (nc, nq)."""
-    key = ("aperture", id(fl))
-    if key not in ctx._cache:
-        m = fl.mech
-        lam = ctx.value(m.lam)[..., 0]
-        g = opening(m, ctx)
-        ac, dac = fl.law.closure_aperture(lam)
-        H = (g > 0).astype(float)
-        n = np.broadcast_to(normals(ctx), ctx.value(m.u + "+").shape)
-        gdot = np.einsum("cqa,cqa->cq", ctx.dot(m.u + "+") - ctx.dot(m.u + "-"), n)
-        adot = dac * ctx.dot(m.lam)[..., 0] + H * gdot
-        ctx._cache[key] = (ac + H * g, dac, H, adot)
-    return ctx._cache[key]
+    def jacobians(self, test: str, s0: Callable, s1: Callable) -> list:
+        """Blocks d(residual of ``test``)/d(lam, u+, u-) through the aperture.
 
+        ``s0(ctx)`` (nc, nq) and ``s1(ctx)`` (nc, nq, d) are the derivatives of
+        the residual's f0 and f1 with respect to a, where a and da/dt change
+        together (d(da/dt)/d(unknown) = shift da/d(unknown), since ac' and H
+        are piecewise constant)."""
+        m = self.mech
 
-def _dflow_f0(fl: DeformableFlow, ctx):
-    a, _, _, adot = _aperture_state(fl, ctx)
-    return (adot + a * fl.compressibility * ctx.dot(fl.p)[..., 0])[..., None]
+        def g0_lam(ctx):
+            return (self.state(ctx).dlam * s0(ctx))[..., None, None]
 
+        def g2_lam(ctx):
+            return (self.state(ctx).dlam[..., None] * s1(ctx))[:, :, None, :, None]
 
-def _dflow_f1(fl: DeformableFlow, ctx):
-    a, _, _, _ = _aperture_state(fl, ctx)
-    return (a ** 3 / (12 * fl.viscosity))[..., None, None] * ctx.grad(fl.p)
+        def g0_u(sign, ctx):
+            return (sign * self.state(ctx).H * s0(ctx))[..., None, None] * normals(ctx)[:, :, None, :]
 
-
-def _dflow_g0_pp(fl: DeformableFlow, ctx):
-    a, _, _, _ = _aperture_state(fl, ctx)
-    return (a * fl.compressibility * ctx.shift)[..., None, None]
-
-
-def _dflow_g3_pp(fl: DeformableFlow, ctx):
-    a, _, _, _ = _aperture_state(fl, ctx)
-    d = ctx.dim
-    return (a ** 3 / (12 * fl.viscosity))[..., None, None, None, None] * np.eye(d)[None, None, None, :, None, :]
-
-
-def _da_sensitivity(fl: DeformableFlow, ctx):
-    """d(f0)/d(a) per unit change of a (shift from a-dot, c_f pdot from storage) and d(f1)/d(a)."""
-    a, _, _, _ = _aperture_state(fl, ctx)
-    s0 = ctx.shift + fl.compressibility * ctx.dot(fl.p)[..., 0]
-    s1 = (3 * a ** 2 / (12 * fl.viscosity))[..., None] * ctx.grad(fl.p)[:, :, 0, :]      # (nc, nq, d)
-    return s0, s1
-
-
-def _dflow_g0_plam(fl: DeformableFlow, ctx):
-    _, dac, _, _ = _aperture_state(fl, ctx)
-    s0, _ = _da_sensitivity(fl, ctx)
-    return (dac * s0)[..., None, None]
-
-
-def _dflow_g2_plam(fl: DeformableFlow, ctx):
-    _, dac, _, _ = _aperture_state(fl, ctx)
-    _, s1 = _da_sensitivity(fl, ctx)
-    return (dac[..., None] * s1)[:, :, None, :, None]
-
-
-def _dflow_g0_pu(fl: DeformableFlow, sign: float, ctx):
-    _, _, H, _ = _aperture_state(fl, ctx)
-    s0, _ = _da_sensitivity(fl, ctx)
-    return (sign * H * s0)[..., None, None] * normals(ctx)[:, :, None, :]
-
-
-def _dflow_g2_pu(fl: DeformableFlow, sign: float, ctx):
-    _, _, H, _ = _aperture_state(fl, ctx)
-    _, s1 = _da_sensitivity(fl, ctx)
-    return sign * (H[..., None] * s1)[:, :, None, :, None] * normals(ctx)[:, :, None, None, :]
-
-
-def deformable_flow_terms(fl: DeformableFlow) -> tuple[list, list]:
-    """Residual and Jacobian of the fracture flow with a = a(lam, g)."""
-    m, reg = fl.mech, fl.mech.region
-    res = [CellResidual(fl.p, partial(_dflow_f0, fl), partial(_dflow_f1, fl), region=reg)]
-    jac = [CellJacobian(fl.p, fl.p, g0=partial(_dflow_g0_pp, fl), g3=partial(_dflow_g3_pp, fl), region=reg),
-           CellJacobian(fl.p, m.lam, g0=partial(_dflow_g0_plam, fl), g2=partial(_dflow_g2_plam, fl), region=reg)]
-    for side, sign in (("+", 1.0), ("-", -1.0)):
-        jac.append(CellJacobian(fl.p, m.u + side, g0=partial(_dflow_g0_pu, fl, sign),
-                                g2=partial(_dflow_g2_pu, fl, sign), region=reg))
-    return res, jac
+        def g2_u(sign, ctx):
+            return sign * (self.state(ctx).H[..., None] * s1(ctx))[:, :, None, :, None] * \
+                normals(ctx)[:, :, None, None, :]
+        out = [CellJacobian(test, m.lam, g0=g0_lam, g2=g2_lam, region=m.region)]
+        for side, sign in (("+", 1.0), ("-", -1.0)):
+            out.append(CellJacobian(test, m.u + side, g0=partial(g0_u, sign), g2=partial(g2_u, sign),
+                                    region=m.region))
+        return out

@@ -1,8 +1,10 @@
 """Fluid flow and heat transport on one region (matrix cells or fracture faces).
 
 The same kernels serve the matrix (physics.md sections 5-6, rigid rock) and
-the fracture (sections 4 and 7, fixed aperture); only the coefficients
-differ.  With mobility M(T) = 1/mu(T) and a constant "permeability" tensor K
+the fracture (sections 4 and 7); only the coefficients differ.  A
+deformable fracture (``aperture``: kernels/contact.Aperture) scales them by
+the local aperture a(lam, g); its storage gains da/dt and its stored energy
+capacity a T (see ``Flow`` and ``Heat``).  With mobility M(T) = 1/mu(T) and a constant "permeability" tensor K
 (the matrix permeability k_m, or a^3/12 I on the fracture):
 
 flow (unknown p)::
@@ -37,7 +39,7 @@ differences).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import Optional
 
@@ -49,7 +51,10 @@ from ..model import CellJacobian, CellResidual
 
 @dataclass(frozen=True)
 class Flow:
-    """Flow coefficients of one region (see the module docstring)."""
+    """Flow coefficients of one region (see the module docstring).  With an
+    ``aperture`` (a deformable fracture, ``contact.Aperture``) the storage,
+    thermal storage and permeability are per unit aperture: S = a storage,
+    B = a thermal_storage, K = a^3 permeability, and da/dt joins the storage."""
     region: str
     p: str                          # pressure field
     T: Optional[str]                # temperature field of mu(T) and B (None: isothermal)
@@ -57,11 +62,14 @@ class Flow:
     permeability: np.ndarray        # K (d, d)
     viscosity: Viscosity = field(default_factory=Viscosity)
     thermal_storage: float = 0.0    # B
+    aperture: Optional[object] = None
 
 
 @dataclass(frozen=True)
 class Heat:
-    """Heat-transport coefficients of one region."""
+    """Heat-transport coefficients of one region.  With an ``aperture`` the
+    capacity and conductivity are per unit aperture (C = a capacity,
+    L = a conductivity) and the stored energy's rate gains capacity T da/dt."""
     region: str
     T: str
     capacity: float                 # C
@@ -71,9 +79,20 @@ class Heat:
     degree: int = 2
     supg: bool = True
     exchange: tuple = ()            # (hw, trace name) pairs: R += hw (T - T_trace) (fracture)
+    aperture: Optional[object] = None
 
 
 # -- helpers ----------------------------------------------------------------------
+def _g0(v):
+    """A per-point coefficient (nc, nq) or a number as a g0 block (.., .., 1, 1)."""
+    return np.asarray(v)[..., None, None] if np.ndim(v) else np.full((1, 1, 1, 1), v)
+
+
+def _aperture(obj, ctx):
+    """The aperture state of a deformable fracture, or None."""
+    return None if obj.aperture is None else obj.aperture.state(ctx)
+
+
 def _mobility(fl: Flow, ctx):
     """(M, dM/dT) at the quadrature points, (nc, nq)."""
     if fl.T is None or not fl.viscosity.water:
@@ -82,16 +101,31 @@ def _mobility(fl: Flow, ctx):
     return fl.viscosity.mobility(ctx.value(fl.T)[..., 0])
 
 
-def _Kgradp(fl: Flow, ctx):
+def _unit_Kgradp(fl: Flow, ctx):
     return np.einsum("ab,cqb->cqa", fl.permeability, ctx.grad(fl.p)[:, :, 0, :])
+
+
+def _Kgradp(fl: Flow, ctx):
+    """K grad p (nc, nq, d), K including a^3 in a deformable fracture."""
+    q, ap = _unit_Kgradp(fl, ctx), _aperture(fl, ctx)
+    return q if ap is None else (ap.a ** 3)[..., None] * q
+
+
+def _storages(fl: Flow, ctx):
+    """(S, B): numbers, or per point in a deformable fracture."""
+    ap = _aperture(fl, ctx)
+    return (fl.storage, fl.thermal_storage) if ap is None else (fl.storage * ap.a, fl.thermal_storage * ap.a)
 
 
 # -- flow -------------------------------------------------------------------------
 def flow_f0(fl: Flow, ctx):
-    r = fl.storage * ctx.dot(fl.p)
+    S, B = _storages(fl, ctx)
+    r = S * ctx.dot(fl.p)[..., 0]
     if fl.T is not None and fl.thermal_storage:
-        r = r - fl.thermal_storage * ctx.dot(fl.T)
-    return r
+        r = r - B * ctx.dot(fl.T)[..., 0]
+    if fl.aperture is not None:
+        r = r + _aperture(fl, ctx).adot
+    return r[..., None]
 
 
 def flow_f1(fl: Flow, ctx):
@@ -100,23 +134,39 @@ def flow_f1(fl: Flow, ctx):
 
 
 def flow_g0_pp(fl: Flow, ctx):
-    return np.full((1, 1, 1, 1), fl.storage * ctx.shift)
+    return _g0(_storages(fl, ctx)[0] * ctx.shift)
 
 
 def flow_g3_pp(fl: Flow, ctx):
     M, _ = _mobility(fl, ctx)
-    if fl.T is None or not fl.viscosity.water:
+    ap = _aperture(fl, ctx)
+    if ap is None and (fl.T is None or not fl.viscosity.water):
         return (M[0, 0] * fl.permeability)[None, None, None, :, None, :]
-    return (M[:, :, None, None] * fl.permeability)[:, :, None, :, None, :]
+    coef = M if ap is None else M * ap.a ** 3
+    return (coef[:, :, None, None] * fl.permeability)[:, :, None, :, None, :]
 
 
 def flow_g0_pT(fl: Flow, ctx):
-    return np.full((1, 1, 1, 1), -fl.thermal_storage * ctx.shift)
+    return _g0(-_storages(fl, ctx)[1] * ctx.shift)
 
 
 def flow_g2_pT(fl: Flow, ctx):
     _, dM = _mobility(fl, ctx)
     return (dM[..., None] * _Kgradp(fl, ctx))[:, :, None, :, None]
+
+
+def flow_s0_aperture(fl: Flow, ctx):
+    """d f0/d a (with da/dt): shift + storage pdot - thermal_storage Tdot."""
+    s = ctx.shift + fl.storage * ctx.dot(fl.p)[..., 0]
+    if fl.T is not None and fl.thermal_storage:
+        s = s - fl.thermal_storage * ctx.dot(fl.T)[..., 0]
+    return s
+
+
+def flow_s1_aperture(fl: Flow, ctx):
+    """d f1/d a = 3 a^2 M K_unit grad p (nc, nq, d)."""
+    M, _ = _mobility(fl, ctx)
+    return (3 * _aperture(fl, ctx).a ** 2 * M)[..., None] * _unit_Kgradp(fl, ctx)
 
 
 def flow_terms(fl: Flow) -> tuple[list, list]:
@@ -129,6 +179,8 @@ def flow_terms(fl: Flow) -> tuple[list, list]:
                                 g0=partial(flow_g0_pT, fl) if fl.thermal_storage else None,
                                 g2=partial(flow_g2_pT, fl) if fl.viscosity.water else None,
                                 region=fl.region))
+    if fl.aperture is not None:
+        jac += fl.aperture.jacobians(fl.p, partial(flow_s0_aperture, fl), partial(flow_s1_aperture, fl))
     return res, jac
 
 
@@ -141,6 +193,9 @@ class _HeatPoint:
         T = h.T
         self.gT = ctx.grad(T)[:, :, 0, :]                           # (nc, nq, d)
         self.Tv = ctx.value(T)[..., 0]
+        self.ap = _aperture(h, ctx)
+        a = 1.0 if self.ap is None else self.ap.a
+        self.C, self.L = h.capacity * a, h.conductivity * a         # numbers or (nc, nq)
         self.advect = h.flow is not None and h.fluid_rho_c != 0.0
         d = ctx.dim
         if self.advect:
@@ -151,12 +206,13 @@ class _HeatPoint:
             self.m = dM / M if h.flow.T == T else np.zeros_like(M)
             hp = ctx.h / h.degree
             self.A = 4.0 / hp ** 2
-            B0 = 9.0 * (4.0 * h.conductivity / hp ** 2) ** 2
+            self.B1 = 144.0 / hp ** 4                                      # B0 = B1 L^2
             bb = np.einsum("cqa,cqa->cq", self.b, self.b)
-            self.tau = 1.0 / np.sqrt(self.A * bb + B0) if h.supg else np.zeros_like(bb)
-            R = h.capacity * ctx.dot(T)[..., 0] + np.einsum("cqa,cqa->cq", self.b, self.gT)
+            self.tau = 1.0 / np.sqrt(self.A * bb + self.B1 * self.L ** 2) if h.supg else np.zeros_like(bb)
+            R = self.C * ctx.dot(T)[..., 0] + np.einsum("cqa,cqa->cq", self.b, self.gT)
             if h.degree > 1:
-                R = R - h.conductivity * ctx.lap(T)[..., 0]
+                self.lapT = ctx.lap(T)[..., 0]
+                R = R - self.L * self.lapT
             for hw, trace in h.exchange:
                 R = R + hw * (self.Tv - ctx.value(trace)[..., 0])
             self.R = R
@@ -171,19 +227,23 @@ class _HeatPoint:
                 + (tau * R)[..., None, None] * eye)
 
 
-def _conduction(h: Heat, gT):
-    L = h.conductivity
+def _conduction(hp: _HeatPoint, gT):
+    L = hp.L
+    if np.ndim(L) == 2:                                              # per point (deformable fracture)
+        return L[..., None] * gT
     return L * gT if np.isscalar(L) else np.einsum("ab,cqb->cqa", L, gT)
 
 
 def heat_f0(h: Heat, ctx):
-    r = h.capacity * ctx.dot(h.T)[..., 0]
-    return r[..., None]
+    ap = _aperture(h, ctx)
+    if ap is None:
+        return (h.capacity * ctx.dot(h.T)[..., 0])[..., None]
+    return (h.capacity * (ap.a * ctx.dot(h.T)[..., 0] + ctx.value(h.T)[..., 0] * ap.adot))[..., None]
 
 
 def heat_f1(h: Heat, ctx):
     hp = _HeatPoint(h, ctx)
-    f1 = _conduction(h, hp.gT)
+    f1 = _conduction(hp, hp.gT)
     if hp.advect:
         f1 = f1 - hp.b * hp.Tv[..., None]
         if h.supg:
@@ -192,7 +252,10 @@ def heat_f1(h: Heat, ctx):
 
 
 def heat_g0_TT(h: Heat, ctx):
-    return np.full((1, 1, 1, 1), h.capacity * ctx.shift)
+    ap = _aperture(h, ctx)
+    if ap is None:
+        return _g0(h.capacity * ctx.shift)
+    return _g0(h.capacity * (ap.a * ctx.shift + ap.adot))
 
 
 def heat_g2_TT(h: Heat, ctx):
@@ -200,7 +263,7 @@ def heat_g2_TT(h: Heat, ctx):
     b, m = hp.b, hp.m[..., None]
     g = -b * (1.0 + hp.Tv[..., None] * m)                   # d(-b T)/dT
     if h.supg:
-        extra = h.capacity * ctx.shift + sum(hw for hw, _ in h.exchange)
+        extra = hp.C * ctx.shift + sum(hw for hw, _ in h.exchange)
         g = g + (hp.tau * extra)[..., None] * b
         g = g + np.einsum("nqac,nqc->nqa", hp.dZ_db(), b * m)
     return g[:, :, None, :, None]
@@ -208,23 +271,27 @@ def heat_g2_TT(h: Heat, ctx):
 
 def heat_g3_TT(h: Heat, ctx):
     d = ctx.dim
-    L = h.conductivity
-    g = (L * np.eye(d) if np.isscalar(L) else np.asarray(L))[None, None]
+    hp = _HeatPoint(h, ctx) if (h.supg or h.aperture is not None) else None
+    L = h.conductivity if hp is None else hp.L
+    if np.ndim(L) == 2:
+        g = L[..., None, None] * np.eye(d)
+    else:
+        g = (L * np.eye(d) if np.isscalar(L) else np.asarray(L))[None, None]
     if h.supg:
-        hp = _HeatPoint(h, ctx)
         g = g + hp.tau[..., None, None] * hp.b[..., :, None] * hp.b[..., None, :]
     return g[:, :, None, :, None, :]
 
 
 def heat_g2lap_TT(h: Heat, ctx):
     hp = _HeatPoint(h, ctx)
-    return (-h.conductivity * hp.tau[..., None] * hp.b)[:, :, None, :, None]
+    return ((-hp.L * hp.tau)[..., None] * hp.b)[:, :, None, :, None]
 
 
 def heat_g3_Tp(h: Heat, ctx):
     """d f1/d grad p = (-T I + dZ/db) db/dgrad p, db/dgrad p = -rho_f C_f M K."""
     hp = _HeatPoint(h, ctx)
-    dbdg = -h.fluid_rho_c * hp.M[..., None, None] * h.flow.permeability[None, None]
+    coef = hp.M if hp.ap is None else hp.M * hp.ap.a ** 3
+    dbdg = -h.fluid_rho_c * coef[..., None, None] * h.flow.permeability[None, None]
     D = -hp.Tv[..., None, None] * np.eye(hp.d)[None, None]
     if h.supg:
         D = D + hp.dZ_db()
@@ -237,13 +304,38 @@ def heat_g2_exchange(h: Heat, hw: float, ctx):
     return (-hw * hp.tau[..., None] * hp.b)[:, :, None, :, None]
 
 
+def heat_s0_aperture(h: Heat, ctx):
+    """d f0/d a (with da/dt): capacity (Tdot + T shift)."""
+    return h.capacity * (ctx.dot(h.T)[..., 0] + ctx.value(h.T)[..., 0] * ctx.shift)
+
+
+def heat_s1_aperture(h: Heat, ctx):
+    """d f1/d a: conductivity grad T - (db/da) T + d(tau R b)/da, db/da = 3 b / a
+    (computed as -rho_f C_f M 3 a^2 K_unit grad p), with
+    dR/da = capacity Tdot + db/da . grad T - conductivity lap T and
+    dtau/da = -tau^3 (A b . db/da + B1 L conductivity)."""
+    hp = _HeatPoint(h, ctx)
+    s = h.conductivity * hp.gT
+    if hp.advect:
+        db = -h.fluid_rho_c * (3 * hp.ap.a ** 2 * hp.M)[..., None] * _unit_Kgradp(h.flow, ctx)
+        s = s - db * hp.Tv[..., None]
+        if h.supg:
+            dR = h.capacity * ctx.dot(h.T)[..., 0] + np.einsum("cqa,cqa->cq", db, hp.gT)
+            if h.degree > 1:
+                dR = dR - h.conductivity * hp.lapT
+            dtau = -hp.tau ** 3 * (hp.A * np.einsum("cqa,cqa->cq", hp.b, db) + hp.B1 * hp.L * h.conductivity)
+            s = s + (dtau * hp.R + hp.tau * dR)[..., None] * hp.b + (hp.tau * hp.R)[..., None] * db
+    return s
+
+
 def heat_terms(h: Heat) -> tuple[list, list]:
     advect = h.flow is not None and h.fluid_rho_c != 0.0
     if advect and not np.isscalar(h.conductivity):
         raise ValueError("a conductivity tensor is only supported without advection")
+    if h.aperture is not None and not np.isscalar(h.conductivity):
+        raise ValueError("a deformable fracture takes a scalar conductivity")
     supg = advect and h.supg
-    hh = h if advect else Heat(h.region, h.T, h.capacity, h.conductivity, 0.0, None, h.degree, False,
-                               h.exchange)
+    hh = h if advect else replace(h, fluid_rho_c=0.0, flow=None, supg=False)
     res = [CellResidual(h.T, partial(heat_f0, hh), partial(heat_f1, hh), region=h.region)]
     jac = [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh) if h.capacity else None,
                         g2=partial(heat_g2_TT, hh) if advect else None,
@@ -255,6 +347,8 @@ def heat_terms(h: Heat) -> tuple[list, list]:
         if supg:
             for hw, trace in h.exchange:
                 jac.append(CellJacobian(h.T, trace, g2=partial(heat_g2_exchange, hh, hw), region=h.region))
+    if h.aperture is not None:
+        jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), partial(heat_s1_aperture, hh))
     return res, jac
 
 

@@ -27,6 +27,8 @@ from ..fields import FieldSpec
 from ..fracture import TIP_BC
 from ..kernels import contact as ct
 from ..kernels import poroelastic as pe
+from ..kernels import transport as tr
+from ..fluid import Viscosity
 from ..model import Model
 from ..params import param
 from ..solver import Dirichlet
@@ -445,9 +447,10 @@ class FractureInflation(PartialOpening):
         w_ref = 4 * (1 - rock.rock_poisson_ratio ** 2) * sn / rock.rock_youngs_modulus * p.partial_half_length
         self.mech = ct.FractureMechanics(2, pf="pf", insitu_normal_stress=-sn, gap_tolerance=GAP_TOLERANCE * w_ref)
         self.law = self[Joint].law()
-        self.flow = ct.DeformableFlow(self.mech, self.law, fl.inflation_compressibility, fl.inflation_viscosity)
+        self.flow = tr.Flow("fracture", "pf", None, fl.inflation_compressibility, np.eye(2) / 12,
+                            Viscosity(fl.inflation_viscosity), aperture=ct.Aperture(self.mech, self.law))
         res, jac = pe.elastic_terms(el)
-        for r, j in (ct.fracture_mechanics_terms(self.mech), ct.deformable_flow_terms(self.flow)):
+        for r, j in (ct.fracture_mechanics_terms(self.mech), tr.flow_terms(self.flow)):
             res, jac = res + r, jac + j
         fields = [FieldSpec("u", 2, degree), FieldSpec("lam", 1, 1, "fracture"), FieldSpec("pf", 1, degree, "fracture")]
         model = Model(fields, res, jac, bounds={"lam": (0.0, None)})

@@ -32,6 +32,7 @@ from ..errors import InputError
 from ..fields import FieldSpec
 from ..fluid import Viscosity
 from ..fracture import FRACTURE_BC, TIP_BC
+from ..kernels import contact as ct
 from ..kernels import transport as tr
 from ..kernels import wells
 from ..model import Model
@@ -50,11 +51,16 @@ class FluidFlow:
 
 
 @dataclass(frozen=True)
-class FractureProps:
-    """Fracture (rigid: fixed aperture)"""
-    fracture_aperture: float = param(1e-3, "m", "hydraulic aperture a0", lo=0.0, lo_open=True)
+class HeatExchange:
+    """Wall heat exchange between the fracture fluid and the rock (physics.md section 7)"""
     fracture_heat_exchange: str = param("equilibrium", "-",
                                         "wall heat exchange: equilibrium, nusselt, or hw in W/(m2 K)")
+
+
+@dataclass(frozen=True)
+class FractureProps(HeatExchange):
+    """Fracture (rigid: fixed aperture)"""
+    fracture_aperture: float = param(1e-3, "m", "hydraulic aperture a0", lo=0.0, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -87,19 +93,19 @@ def _viscosity(fl: FluidFlow) -> Viscosity:
                          "or 'water'") from None
 
 
-def exchange_coefficient(fp: FractureProps, fluid_conductivity: float):
+def exchange_coefficient(he: HeatExchange, aperture: float, fluid_conductivity: float):
     """None for 'equilibrium', else hw (W/(m2 K)): Nu lambda_f / (2 a) or the given number."""
-    mode = fp.fracture_heat_exchange.strip().lower()
+    mode = he.fracture_heat_exchange.strip().lower()
     if mode == "equilibrium":
         return None
     if mode == "nusselt":
-        return NUSSELT * fluid_conductivity / (2 * fp.fracture_aperture)
+        return NUSSELT * fluid_conductivity / (2 * aperture)
     try:
         hw = float(mode)
     except ValueError:
         hw = -1.0
     if not hw > 0:
-        raise InputError(f"option -thm_fracture_heat_exchange = {fp.fracture_heat_exchange} is not "
+        raise InputError(f"option -thm_fracture_heat_exchange = {he.fracture_heat_exchange} is not "
                          "equilibrium, nusselt or a number > 0 (W/(m2 K))")
     return hw
 
@@ -112,19 +118,26 @@ class FractureScene(Scene):
     # systems defeat GMRES + GAMG (hundreds of iterations, failed steps)
     direct_solve = True
 
+    def reference_aperture(self) -> float:
+        """The fracture's aperture (rigid), or its initial aperture (deformable)."""
+        return self[FractureProps].fracture_aperture
+
     def fracture_model(self, mesh, degree, *, heat: bool, permeability=None, matrix_storage=0.0,
-                       matrix_thermal_storage=0.0, rock_conductivity=None) -> Model:
+                       matrix_thermal_storage=0.0, rock_conductivity=None, aperture=None) -> Model:
         """Fields, terms and ties: pf (+ Tf, Tm with ``heat``; + pm with a
-        ``permeability`` tensor)."""
-        fl, fp, m = self[FluidFlow], self[FractureProps], self.material
+        ``permeability`` tensor).  ``aperture``: a ``contact.Aperture`` (a
+        deformable fracture; the caller adds u and lam), else the fixed
+        ``reference_aperture``."""
+        fl, m = self[FluidFlow], self.material
         mu = _viscosity(fl)
-        a = fp.fracture_aperture
+        a = self.reference_aperture()
+        unit = 1.0 if aperture is not None else a          # coefficients per unit aperture, or times a
         d = mesh.dim
         fields = [FieldSpec("pf", 1, degree, "fracture")]
         res, jac, ties = [], [], {}
         Tf = "Tf" if heat else None
-        frac_flow = tr.Flow("fracture", "pf", Tf, a * fl.fluid_compressibility, a ** 3 / 12 * np.eye(d), mu,
-                            a * fl.fluid_thermal_expansion if heat else 0.0)
+        frac_flow = tr.Flow("fracture", "pf", Tf, unit * fl.fluid_compressibility, unit ** 3 / 12 * np.eye(d), mu,
+                            unit * fl.fluid_thermal_expansion if heat else 0.0, aperture=aperture)
         r, j = tr.flow_terms(frac_flow)
         res, jac = res + r, jac + j
         matrix_flow = None
@@ -137,7 +150,7 @@ class FractureScene(Scene):
             res, jac = res + r, jac + j
         if heat:
             fields += [FieldSpec("Tf", 1, degree, "fracture"), FieldSpec("Tm", 1, degree, "matrix")]
-            hw = exchange_coefficient(fp, m.fluid_conductivity)
+            hw = exchange_coefficient(self[HeatExchange], a, m.fluid_conductivity)
             exchange = ()
             if hw is None:
                 ties["Tm"] = "Tf"
@@ -148,8 +161,8 @@ class FractureScene(Scene):
                 exchange = tuple((hw, s) for s in ("Tm-", "Tm+"))
                 r, j = tr.exchange_terms("Tf", ("Tm-", "Tm+"), hw)
                 res, jac = res + r, jac + j
-            frac_heat = tr.Heat("fracture", "Tf", a * m.fluid_rho_c, a * m.fluid_conductivity, m.fluid_rho_c,
-                                frac_flow, degree, True, exchange)
+            frac_heat = tr.Heat("fracture", "Tf", unit * m.fluid_rho_c, unit * m.fluid_conductivity, m.fluid_rho_c,
+                                frac_flow, degree, True, exchange, aperture)
             r, j = tr.heat_terms(frac_heat)
             res, jac = res + r, jac + j
             lam = m.conductivity if rock_conductivity is None else rock_conductivity
@@ -174,11 +187,20 @@ class FractureScene(Scene):
         w = next((v for k, v in self.p.items() if issubclass(k, Wells)), Wells())
         p0, T0 = w.initial_pressure, w.initial_temperature + CELSIUS
 
+        a_ref = self.reference_aperture()
+
+        def aperture(ctx):
+            ap = frac_flow.aperture
+            return ap.law.aperture(ctx.value(ap.mech.lam)[..., 0], ct.opening(ap.mech, ctx))
+
         def vol(fl):
             def f(ctx):
                 s = fl.storage * (ctx.value(fl.p)[..., 0] - p0)
                 if fl.T is not None and fl.thermal_storage:
                     s = s - fl.thermal_storage * (ctx.value(fl.T)[..., 0] - T0)
+                if fl.aperture is not None:          # (a - a_ref) + a (c_f dp - beta_f dT)
+                    a = aperture(ctx)
+                    s = a - a_ref + a * s
                 return s
             return f
         storage = {"fracture": vol(frac_flow)}
@@ -186,17 +208,24 @@ class FractureScene(Scene):
             storage["matrix"] = vol(matrix_flow)
         out = [Conserved("mass", ("pf", "pm"), "pf", storage)]
         if heat:
-            a = self[FractureProps].fracture_aperture
+            def frac_energy(ctx):
+                Tf = ctx.value("Tf")[..., 0]
+                if frac_flow.aperture is None:
+                    return a_ref * m.fluid_rho_c * (Tf - T0)
+                a = aperture(ctx)                    # a (T - T0) + T0 (a - a_ref): the change of a T
+                return m.fluid_rho_c * (a * (Tf - T0) + T0 * (a - a_ref))
             out.append(Conserved("energy", ("Tf", "Tm"), "Tf", {
-                "fracture": lambda ctx: a * m.fluid_rho_c * (ctx.value("Tf")[..., 0] - T0),
+                "fracture": frac_energy,
                 "matrix": lambda ctx: m.rho_c * (ctx.value("Tm")[..., 0] - T0)}))
         return out
 
-    def well_terms(self, mesh, injector_at, producer_at, heat: bool):
-        w, fp = self[Wells], self[FractureProps]
+    def well_terms(self, mesh, injector_at, producer_at, heat: bool, share: float = 1.0):
+        """Injector and producer (``share``: the part of each well in the model, 1/2 on a symmetry plane).
+        The producer's well index uses the reference aperture and the viscosity at T0."""
+        w = self[Wells]
         mu = _viscosity(self[FluidFlow])
         T_res = w.initial_temperature + CELSIUS
-        Th = fp.fracture_aperture ** 3 / (12 * mu.mu(T_res))
+        Th = self.reference_aperture() ** 3 / (12 * mu.mu(T_res))
         surf = mesh.fracture
         h = float(surf.h.min()) if surf.ncells else np.inf
         h = mesh.dm.comm.tompi4py().allreduce(h, op=_min())
@@ -204,10 +233,10 @@ class FractureScene(Scene):
         T = "Tf" if heat else None
         out = []
         if injector_at is not None:
-            out.append(wells.injector(injector_at, w.injection_rate, rho_c, w.injection_temperature + CELSIUS,
-                                      T=T))
+            out.append(wells.injector(injector_at, share * w.injection_rate, rho_c,
+                                      w.injection_temperature + CELSIUS, T=T))
         if producer_at is not None:
-            PI = wells.well_index(float(Th), h, w.well_radius, self.flow_dim)
+            PI = share * wells.well_index(float(Th), h, w.well_radius, self.flow_dim)
             out.append(wells.producer(producer_at, w.production_pressure, PI, rho_c, T=T))
         self.wells = out
         return out

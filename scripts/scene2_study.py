@@ -1,0 +1,172 @@
+"""Scene 2 of the paper (``penny_impermeable``): the runs to t = 1e9 s, the
+paper's Figs. 5 and 6, and a sensitivity study (mesh, domain size, heat
+exchange mode, time step).
+
+    python scripts/scene2_study.py [--out benchmarks/results/scene2] [--jobs 1] [--cases a,b] [--plot-only]
+
+Each case runs ``python -m petthm penny_impermeable -options_file
+options/scenes/penny_impermeable.opts`` with its own options, then this
+script plots from the runs' history.csv and fracture_final.npz only:
+  scene2_fig5_maps.png      Tf, aperture and contact traction on the fracture
+                            at t = 1e9 s (the default case; mirrored about y = 0)
+  scene2_fig6_injector.png  injection pressure and aperture at the injector vs time
+and writes scene2.csv / scene2.md (targets at 1e9 s, the injection-pressure
+peak, the a(lam) identity, balances, wall time)."""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+from study_tables import markdown, write_csv, write_markdown
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+OPTS = os.path.join(ROOT, "options", "scenes", "penny_impermeable.opts")
+DEFAULT = "h10"
+CASES = {
+    "h20": ("fracture mesh 20 m, wells 10 m", ["-thm_scene2_fracture_size", "20", "-thm_scene2_well_size", "10"]),
+    "h10": ("default: fracture mesh 10 m, wells 5 m", []),
+    "h5": ("fracture mesh 5 m, wells 2.5 m", ["-thm_scene2_fracture_size", "5", "-thm_scene2_well_size", "2.5"]),
+    "p2": ("default mesh, P2 displacement", ["-thm_fe_degree", "2"]),
+    "box5": ("default mesh, domain 5 R", ["-thm_scene2_box", "5"]),
+    "nusselt": ("default mesh, wall exchange hw = Nu lambda_f / (2 a)", ["-thm_fracture_heat_exchange", "nusselt"]),
+    "dt": ("default mesh, steps x1.1 up to 5e6 s", ["-thm_dt_growth", "1.1", "-thm_dt_max", "5e6"]),
+    "tip0": ("default mesh, lam = 0 at the front", ["-thm_scene2_tip_traction", "zero"]),
+}
+PAPER = {"lam_injector": 30e6, "aperture_injector": 0.3e-3}
+
+
+def run(out, name, extra):
+    d = os.path.join(out, "runs", name)
+    cmd = [sys.executable, "-m", "petthm", "penny_impermeable", "-options_file", OPTS, "-thm_output_dir", d,
+           "-thm_quiet", *CASES[name][1], *extra]
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
+    if p.returncode:
+        print(p.stdout, p.stderr, file=sys.stderr)
+        raise SystemExit(f"run {name} failed")
+    print(f"{name}: done", flush=True)
+
+
+def history(d):
+    rows = list(csv.DictReader(open(os.path.join(d, "history.csv"))))
+    return {k: np.array([float(r[k]) for r in rows[1:]]) for k in rows[0] if k}
+
+
+def row(name, d):
+    h, s = history(d), json.load(open(os.path.join(d, "summary.json")))
+    k = int(np.argmax(h["injection_pressure"]))
+    p = h["injection_pressure"]
+    return {"case": name, "what": CASES[name][0], "cells": s["cells"],
+            "lam_injector_MPa": round(h["lam_injector"][-1] / 1e6, 2),
+            "lam_error": round(h["lam_injector"][-1] / PAPER["lam_injector"] - 1, 3),
+            "aperture_injector_mm": round(h["aperture_injector"][-1] * 1e3, 4),
+            "aperture_error": round(h["aperture_injector"][-1] / PAPER["aperture_injector"] - 1, 3),
+            "lam_injector_1e5_MPa": round(float(np.interp(5.0, np.log10(h["time"]), h["lam_injector"])) / 1e6, 2),
+            "p_inj_peak_time": float(f"{h['time'][k]:.2g}"),
+            "p_inj_rise_MPa": round((p[k] - p[0]) / 1e6, 3), "p_inj_fall_MPa": round((p[k] - p[-1]) / 1e6, 3),
+            "T_prod_1e9": round(float(h["production_temperature"][-1]), 2),
+            "aperture_identity": s["balance_max"]["aperture_identity"],
+            "mass_balance_max": s["balance_max"]["mass_balance"],
+            "energy_balance_max": s["balance_max"]["energy_balance"],
+            "Tf_bounds_violation": s["balance_max"]["Tf_bounds_violation"],
+            "steps": s["steps"], "rejected": s["rejected_steps"], "newton": s["snes_iterations"],
+            "wall_s": round(s["wall_time"]["total"], 1)}
+
+
+def fig6(out, names):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
+    for name in names:
+        h = history(os.path.join(out, "runs", name))
+        lw = 2.0 if name == DEFAULT else 1.0
+        ax1.semilogx(h["time"], h["injection_pressure"] / 1e6, lw=lw, label=f"{name}: {CASES[name][0]}")
+        ax2.semilogx(h["time"], h["aperture_injector"] * 1e3, lw=lw, label=name)
+    ax2.axhline(0.3, color="k", ls="--", lw=1, label="paper at 1e9 s (about 0.3 mm)")
+    ax1.set_ylabel("injection pressure (MPa)")
+    ax2.set_ylabel("aperture at the injector (mm)")
+    ax2.set_xlabel("time (s)")
+    ax1.set_title("Scene 2: injection pressure and aperture at the injector (cf. paper Fig. 6)")
+    for ax in (ax1, ax2):
+        ax.grid(True, which="both", alpha=0.3)
+    ax1.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "scene2_fig6_injector.png"), dpi=120)
+
+
+def fig5(out, name):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.tri import Triangulation
+    z = np.load(os.path.join(out, "runs", name, "fracture_final.npz"))
+    v, T = z["vertices"], z["Tf"]
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4.6))
+
+    def mirrored(xy, val):
+        """The half model y >= 0 mirrored about the symmetry plane."""
+        x = np.concatenate([xy[:, 0], xy[:, 0]])
+        y = np.concatenate([xy[:, 1], -xy[:, 1]])
+        keep = np.unique(np.round(np.column_stack([x, y]), 9), axis=0, return_index=True)[1]
+        return x[keep], y[keep], np.concatenate([val, val])[keep]
+    panels = [(T[:, :2], T[:, 2], "Tf (degC)", "coolwarm"), (v[:, :2], v[:, 4] * 1e3, "aperture (mm)", "viridis"),
+              (v[:, :2], v[:, 3] / 1e6, "contact traction lam (MPa)", "magma")]
+    for ax, (xy, val, title, cmap) in zip(axs, panels):
+        x, y, c = mirrored(xy, val)
+        tri = Triangulation(x, y)
+        cs = ax.tricontourf(tri, c, levels=20, cmap=cmap)
+        fig.colorbar(cs, ax=ax, shrink=0.85)
+        ax.plot([-50, 50], [0, 0], "k^", ms=6)
+        ax.set_aspect("equal")
+        ax.set_title(title)
+        ax.set_xlabel("x (m)")
+    axs[0].set_ylabel("y (m)")
+    fig.suptitle("Scene 2 at t = 1e9 s (cf. paper Fig. 5); injector at x = -50 m, producer at x = 50 m")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "scene2_fig5_maps.png"), dpi=110)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "scene2"))
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--cases", default=",".join(CASES), help="subset of: " + ",".join(CASES))
+    ap.add_argument("extra", nargs="*")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    names = [c for c in a.cases.split(",") if c]
+    unknown = [c for c in names if c not in CASES]
+    if unknown:
+        raise SystemExit(f"scene2_study.py: unknown case(s) {unknown}; accepted: {', '.join(CASES)}")
+    if not a.plot_only:
+        with ThreadPoolExecutor(a.jobs) as ex:
+            list(ex.map(lambda c: run(a.out, c, a.extra), names))
+    done = [c for c in CASES if os.path.exists(os.path.join(a.out, "runs", c, "summary.json"))]
+    rows = [row(c, os.path.join(a.out, "runs", c)) for c in done]
+    fig6(a.out, done)
+    if DEFAULT in done:
+        fig5(a.out, DEFAULT)
+    write_csv(os.path.join(a.out, "scene2.csv"), rows)
+    md = markdown([("case", "case", ""), ("what", "what", ""), ("cells", "cells", ""),
+                   ("lam inj. 1e9 s (MPa)", "lam_injector_MPa", ""), ("vs 30 MPa", "lam_error", "+.1%"),
+                   ("a inj. 1e9 s (mm)", "aperture_injector_mm", ""), ("vs 0.3 mm", "aperture_error", "+.1%"),
+                   ("lam inj. 1e5 s (MPa)", "lam_injector_1e5_MPa", ""),
+                   ("p_inj peak at (s)", "p_inj_peak_time", ".1e"), ("rise (MPa)", "p_inj_rise_MPa", ""),
+                   ("fall after peak (MPa)", "p_inj_fall_MPa", ""), ("T_prod 1e9 s (degC)", "T_prod_1e9", ""),
+                   ("a(lam) identity", "aperture_identity", ".1e"), ("mass bal.", "mass_balance_max", ".1e"),
+                   ("energy bal.", "energy_balance_max", ".1e"), ("Tf bound viol.", "Tf_bounds_violation", ".1e"),
+                   ("steps", "steps", ""), ("Newton", "newton", ""), ("wall (s)", "wall_s", "")], rows)
+    write_markdown(os.path.join(a.out, "scene2.md"), "Scene 2 (penny_impermeable): targets and sensitivity", md)
+    print(md)
+
+
+if __name__ == "__main__":
+    main()
