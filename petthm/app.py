@@ -29,7 +29,7 @@ _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "
 
 
 #: a solver recipe may set the split of a field the scene does not have
-_RECIPE_SPLITS = tuple(f"{pre}fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam") for pre in ("", "vi_"))
+_RECIPE_SPLITS = tuple(f"{pre}fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam", "rest") for pre in ("", "vi_"))
 
 
 def _say(comm, msg):

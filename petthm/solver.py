@@ -599,7 +599,12 @@ class VIFieldSplit:
     ``SNES.getVIInactiveSet()`` (all unknowns for ``vinewtonssls``), named by
     the field, the rigid-body modes on u.  The inner PC takes its options
     with the prefix ``vi_`` (``-vi_pc_fieldsplit_type schur``,
-    ``-vi_fieldsplit_u_pc_type gamg``, ...)."""
+    ``-vi_fieldsplit_u_pc_type gamg``, ...).
+
+    ``-vi_groups NAME=F1+F2,NAME2=...`` merges fields into named splits
+    (fields the scene does not have are skipped, empty groups dropped), so
+    that one two-split Schur recipe serves u with lam alone and u with
+    {lam, pf, Tf, Tm}: ``-vi_groups u=u,rest=lam+pm+pf+Tm+Tf``."""
 
     #: (Problem, SNES) of the solve in progress, set by ``TimeStepper`` (PETSc
     #: may create a new instance of this class whenever it reads the options)
@@ -617,7 +622,7 @@ class VIFieldSplit:
         if snes.getType() == "vinewtonrsls" and P.getSize()[0] != problem.X.getSize():
             space = np.asarray(snes.getVIInactiveSet().getIndices(), dtype=compat.INT)
         splits = problem.field_splits(space)
-        splits = [(n, s) for n, s in splits if s.getSize() > 0]
+        splits = self._grouped([(n, s) for n, s in splits if s.getSize() > 0], pc)
         if self.inner is not None:
             self.inner.destroy()
         self.inner = PETSc.PC().create(comm=pc.getComm())
@@ -627,6 +632,31 @@ class VIFieldSplit:
         self.inner.setFieldSplitIS(*splits)
         self.inner.setFromOptions()
         self.inner.setUp()
+
+    @staticmethod
+    def _grouped(splits: list, pc) -> list:
+        """The splits merged by ``-vi_groups`` (see the class docstring)."""
+        from .errors import InputError
+        text = PETSc.Options((pc.getOptionsPrefix() or "") + "vi_").getString("groups", "")
+        if not text:
+            return splits
+        by_name = dict(splits)
+        grouped = {f for item in text.split(",") for f in item.partition("=")[2].split("+")}
+        missing = [n for n in by_name if n not in grouped]
+        if missing:
+            raise InputError(f"option -vi_groups = {text} leaves out the field(s) {', '.join(missing)}")
+        out = []
+        for item in text.split(","):
+            name, _, members = item.partition("=")
+            parts = [by_name[f] for f in members.split("+") if f in by_name]
+            if not name or not members:
+                raise InputError(f"option -vi_groups: '{item}' is not NAME=FIELD+FIELD...")
+            if len(parts) == 1:
+                out.append((name, parts[0]))
+            elif parts:
+                idx = np.unique(np.concatenate([p.getIndices() for p in parts])).astype(compat.INT)
+                out.append((name, PETSc.IS().createGeneral(idx, comm=pc.getComm())))
+        return out
 
     def reset(self, pc):
         if self.inner is not None:

@@ -1,6 +1,6 @@
 """Scene 2 of the paper (``penny_impermeable``): the runs to t = 1e9 s, the
-paper's Figs. 5 and 6, and a sensitivity study (mesh, domain size, heat
-exchange mode, time step).
+paper's Figs. 5 and 6, and a sensitivity study (mesh, layers, domain size,
+heat exchange mode, time step, traction at the front).
 
     python scripts/scene2_study.py [--out benchmarks/results/scene2] [--jobs 1] [--cases a,b] [--plot-only]
 
@@ -29,14 +29,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OPTS = os.path.join(ROOT, "options", "scenes", "penny_impermeable.opts")
 DEFAULT = "h10"
 CASES = {
-    "h20": ("fracture mesh 20 m, wells 10 m", ["-thm_scene2_fracture_size", "20", "-thm_scene2_well_size", "10"]),
-    "h10": ("default: fracture mesh 10 m, wells 5 m", []),
-    "h5": ("fracture mesh 5 m, wells 2.5 m", ["-thm_scene2_fracture_size", "5", "-thm_scene2_well_size", "2.5"]),
-    "p2": ("default mesh, P2 displacement", ["-thm_fe_degree", "2"]),
-    "box5": ("default mesh, domain 5 R", ["-thm_scene2_box", "5"]),
-    "nusselt": ("default mesh, wall exchange hw = Nu lambda_f / (2 a)", ["-thm_fracture_heat_exchange", "nusselt"]),
-    "dt": ("default mesh, steps x1.1 up to 5e6 s", ["-thm_dt_growth", "1.1", "-thm_dt_max", "5e6"]),
-    "tip0": ("default mesh, lam = 0 at the front", ["-thm_scene2_tip_traction", "zero"]),
+    "h10": ("default: layered mesh, fracture 10 m, wells 5 m, first layer 0.5 m", []),
+    "h20": ("fracture 20 m, wells 10 m", ["-thm_scene2_fracture_size", "20", "-thm_scene2_well_size", "10"]),
+    "thin": ("first layer 0.25 m growing by 1.3", ["-thm_scene2_layer", "0.25", "-thm_scene2_layer_growth", "1.3"]),
+    "tet": ("isotropic tetrahedra (no layers)", ["-thm_scene2_layer", "0"]),
+    "box5": ("domain 5 R", ["-thm_scene2_box", "5"]),
+    "nusselt": ("wall exchange hw = Nu lambda_f / (2 a0)", ["-thm_fracture_heat_exchange", "nusselt"]),
+    "dt": ("steps x1.1 up to 5e6 s", ["-thm_dt_growth", "1.1", "-thm_dt_max", "5e6"]),
+    "tip0": ("lam = 0 at the front", ["-thm_scene2_tip_traction", "zero"]),
 }
 PAPER = {"lam_injector": 30e6, "aperture_injector": 0.3e-3}
 

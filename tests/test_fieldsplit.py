@@ -4,6 +4,7 @@ rigid-body near-nullspace of the displacement split (issue 4)."""
 import csv
 
 import numpy as np
+import pytest
 
 from conftest import ROOT, build_problem, run_petthm
 
@@ -57,3 +58,25 @@ def test_vi_fieldsplit_follows_the_active_set(tmp_path):
         assert s["status"] == "completed" and max(its) <= 15
         assert s["open_length"] == ref["open_length"] and s["nodes_open"] == ref["nodes_open"]
         assert abs(s["opening_centre"] - ref["opening_centre"]) <= 1e-6 * ref["opening_centre"]
+
+
+@pytest.mark.parametrize("method", ["vinewtonrsls", "vinewtonssls"])
+def test_vi_fieldsplit_scene2(tmp_path, method):
+    """Scene 2 (u, lam, pf, Tf, Tm; coarse layered mesh, 1e5 s) with the same
+    contact recipe (-vi_groups: u against {lam, pf, Tf, Tm}): <= 15 Newton
+    iterations per step with both VI methods and the direct solve's
+    histories to 1e-7."""
+    opts = ("-thm_fe_degree", 1, "-thm_scene2_fracture_size", 20, "-thm_scene2_well_size", 10, "-thm_scene2_layer", 2,
+            "-thm_scene2_layer_growth", 2.5, "-thm_mesh_size", 150, "-thm_final_time", 1e5)
+    run_petthm("penny_impermeable", tmp_path / "direct", *opts)
+    out = tmp_path / method
+    _, s = run_petthm("penny_impermeable", out, *opts, "-options_file",
+                      f"{ROOT}/options/solvers/fieldsplit_contact.opts", "-snes_type", method)
+    h1 = list(csv.DictReader(open(tmp_path / "direct" / "history.csv")))
+    h2 = list(csv.DictReader(open(out / "history.csv")))
+    its = [int(r["snes_its"]) for r in h2[1:]]
+    keys = ("injection_pressure", "lam_injector", "aperture_injector", "production_temperature")
+    worst = max(abs(float(a[k]) - float(b[k])) / abs(float(a[k])) for a, b in zip(h1, h2) for k in keys)
+    print(method, "Newton per step max", max(its), "Krylov", s["ksp_iterations"], "vs direct", worst)
+    assert s["status"] == "completed" and len(h1) == len(h2) and max(its) <= 15
+    assert worst <= 1e-7
