@@ -83,3 +83,20 @@ def test_scene2_thermal_shock_230K(tmp_path, petthm_run):
     assert s["status"] == "completed" and np.isfinite(vals).all()
     assert opened > 0 and vals[:, 1].min() >= 0.0
     assert s["balance_max"]["Tf_bounds_violation"] <= 0.05
+
+
+@pytest.mark.parametrize("scene,opts", [
+    ("penny_impermeable", dict(COARSE, thm_fe_degree=1)),
+    ("thermal_stress", dict(thm_mesh_size=10.0, thm_thermal_surface_size=2.0, thm_fe_degree=2)),
+])
+def test_thermomechanical_heating_jacobian(tmp_path, scene, opts):
+    """The strain heating beta_s K T d(div u)/dt of physics.md section 6:
+    its T-T and T-u blocks against central differences.  The rock heat
+    residual is linear in u and in Tm, so central differences are exact but
+    for round-off, which the large terms of the Tm rows that u does not
+    change make 1e-5 at a step of 1e-6 (it falls as 1/step: 1.8e-7 at 1e-4);
+    a step of 1e-2 measures the blocks to 2e-9."""
+    problem = build_problem(tmp_path, scene, thm_thermomechanical_heating=1, **opts)
+    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=1e-2)
+    print(scene, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
+    assert err[("Tm", "u")] <= 1e-6 and err[("Tm", "Tm")] <= 1e-6

@@ -11,7 +11,8 @@ u is the displacement from the in-situ state).  Weak form:
 Flow: alpha d(div u)/dt is added to the matrix flow residual (the rest of
 section 5 is ``transport.Flow`` with storage S = 1/M = phi c_f + (alpha - phi)/K_s).
 In 2D the equations are those of plane strain (the same formulas with d = 2).
-The thermo-mechanical heating terms of section 6 are not included yet.
+Heat (``heating_terms``): the thermo-mechanical terms of section 6,
+beta_s K T d(div u)/dt - phi beta_f T dp/dt, in the matrix heat equation.
 """
 from __future__ import annotations
 
@@ -112,6 +113,41 @@ def elastic_terms(el: Elastic) -> tuple[list, list]:
     if el.T is not None and el.thermal_expansion:
         jac.append(CellJacobian(el.u, el.T, g2=partial(_g2_coupling, el.bulk * el.thermal_expansion, el.dim),
                                 region=el.region))
+    return res, jac
+
+
+def heating_terms(el: Elastic, T: str, p: Optional[str] = None, porosity_expansion: float = 0.0) -> tuple[list, list]:
+    """Thermo-mechanical heating of physics.md section 6 in the heat equation of ``T``:
+
+        + beta_s K T d(div u)/dt - phi beta_f T dp/dt
+
+    (T in kelvin; compression heats, expansion and pressure rise of the pore
+    fluid cool).  ``porosity_expansion`` is phi beta_f (0 or no ``p``: the
+    strain term only).  Exact Jacobians with respect to T, u and p."""
+    bK = el.bulk * el.thermal_expansion
+    pe = porosity_expansion if p is not None else 0.0
+
+    def rate(ctx):
+        r = bK * np.trace(_grad_dot(ctx, el.u), axis1=2, axis2=3)
+        if pe:
+            r = r - pe * ctx.dot(p)[..., 0]
+        return r
+
+    def f0(ctx):
+        return (ctx.value(T)[..., 0] * rate(ctx))[..., None]
+
+    def g0_TT(ctx):
+        return rate(ctx)[..., None, None]
+
+    def g1_Tu(ctx):
+        return (bK * ctx.shift * ctx.value(T)[..., 0])[..., None, None, None] * np.eye(el.dim)[None, None, None]
+
+    def g0_Tp(ctx):
+        return (-pe * ctx.shift * ctx.value(T)[..., 0])[..., None, None]
+    res = [CellResidual(T, f0, None, region=el.region)]
+    jac = [CellJacobian(T, T, g0=g0_TT, region=el.region), CellJacobian(T, el.u, g1=g1_Tu, region=el.region)]
+    if pe:
+        jac.append(CellJacobian(T, p, g0=g0_Tp, region=el.region))
     return res, jac
 
 

@@ -363,6 +363,8 @@ class ThermalStressParams:
     thermal_depth: float = param(60.0, "m", "depth of the column (> 4 sqrt(kappa t_final))", lo=0.0, lo_open=True)
     thermal_width: float = param(1.0, "m", "width of the column", lo=0.0, lo_open=True)
     thermal_surface_size: float = param(0.1, "m", "mesh size at the surface", lo=0.0, lo_open=True)
+    thermomechanical_heating: bool = param(False, "-", "the strain heating beta_s K T d(div u)/dt of "
+                                           "physics.md section 6 (the reference solution leaves it out)")
 
 
 @register
@@ -420,6 +422,9 @@ class ThermalStress(Scene):
         heat = tr.Heat("matrix", "Tm", p.rock_density * p.rock_heat_capacity, p.rock_conductivity, degree=degree)
         r1, j1 = pe.elastic_terms(self.el)
         r2, j2 = tr.heat_terms(heat)
+        if p.thermomechanical_heating:
+            r3, j3 = pe.heating_terms(self.el, "Tm")
+            r2, j2 = r2 + r3, j2 + j3
         model = Model([FieldSpec("u", mesh.dim, degree), FieldSpec("Tm", 1, degree)], r1 + r2, j1 + j2)
         zero = lambda x, t: np.zeros(len(x))  # noqa: E731
         bcs = [Dirichlet("u", "sides", zero, components=(1,)), Dirichlet("u", "bottom", zero, components=(0,)),

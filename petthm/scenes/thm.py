@@ -9,9 +9,9 @@ sections 2-4, 7-11).
 
 The model is the half y >= 0 (the wells lie on the symmetry plane y = 0 and
 carry half their rate).  Tm = Tf on the fracture walls ("equilibrium"
-exchange, the default) or a wall exchange coefficient.  The thermo-
-mechanical heating terms of section 6 are left out (a scene may, section 6);
-so is the thermal expansion of the fluid in the rock (no pores).
+exchange, the default) or a wall exchange coefficient.  The strain heating
+of section 6 is an option (-thm_thermomechanical_heating, off by default as
+section 6 allows); the rock has no pores.
 """
 from __future__ import annotations
 
@@ -49,6 +49,8 @@ class Scene2Params:
                                 "(layered mesh, growing by -thm_scene2_layer_growth); 0: unstructured tetrahedra",
                                 lo=0.0)
     scene2_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
+    thermomechanical_heating: bool = param(False, "-", "the strain heating beta_s K Tm d(div u)/dt of "
+                                           "physics.md section 6 (an energy source the balance leaves out)")
     scene2_tip_traction: str = param("insitu", "-", "lam at the fracture front: insitu (its initial value) "
                                      "or zero", choices=("insitu", "zero"))
 
@@ -146,6 +148,10 @@ class PennyImpermeable(MechanicsScene, FractureScene):
         model.fields = [FieldSpec("u", 3, degree), FieldSpec("lam", 1, 1, "fracture")] + model.fields
         model.residuals += r1 + r2
         model.jacobians += j1 + j2
+        if p.thermomechanical_heating:
+            r3, j3 = pe.heating_terms(el, "Tm")
+            model.residuals += r3
+            model.jacobians += j3
         model.bounds = {"lam": (0.0, None)}
         inj, prod = self.wells_at()
         model.points.extend(self.well_terms(mesh, inj, prod, heat=True, share=self.share))
