@@ -1,6 +1,6 @@
-"""Fracture-mechanics studies (issue 4): CSV, PNG and markdown tables.
+"""Mechanics studies (issue 4): CSV, PNG and markdown tables.
 
-    python scripts/contact_study.py [--out benchmarks/results/contact] [--study sneddon,vi] [--plot-only]
+    python scripts/contact_study.py [--out benchmarks/results/contact] [--study sneddon,vi,mandel] [--plot-only]
 
 * ``sneddon``: error against run time for the Griffith (2D) and penny (3D)
   cracks, P1 and P2, three or four crack mesh sizes each: the error of the
@@ -12,6 +12,10 @@
   Krylov iterations per step,
   failed solves, the end of the open zone and the opening at the centre,
   and the largest difference of the opening profile from the finest mesh.
+* ``mandel``: error against run time for Mandel's problem, u of degree 1
+  and 2 (pm P1), three structured meshes: the largest nodal pressure error
+  over c t/a^2 = 0.01 ... 1 and the error of the Mandel-Cryer peak, both
+  relative to p0 (verification.md section 6), with each run's wall time.
 
 Each run is ``python -m petthm SCENE``; the study reads only the runs'
 summary.json and history.csv files.
@@ -32,6 +36,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SNEDDON = {2: ["-thm_sneddon_dim", "2", "-thm_sneddon_radius", "50"], 3: []}
 SNEDDON_SIZES = {2: [0.1, 0.05, 0.025, 0.0125], 3: [0.2, 0.1, 0.05]}
 VI_SIZES = [0.05, 0.025, 0.0125]
+MANDEL_SIZES = [1.0, 0.5, 0.25]
 VI_METHODS = ["vinewtonrsls", "vinewtonssls"]
 VI_SOLVERS = {"direct": [], "fieldsplit": ["-options_file", os.path.join(ROOT, "options", "solvers",
                                                                          "fieldsplit_contact.opts")]}
@@ -63,6 +68,41 @@ def sneddon_study(out):
                       f"L2 {e['opening_l2_error']:.2e}", flush=True)
     write_csv(os.path.join(out, "sneddon.csv"), rows)
     return rows
+
+
+def mandel_study(out):
+    rows = []
+    for degree in (1, 2):
+        for h in MANDEL_SIZES:
+            d = os.path.join(out, "runs", f"mandel_P{degree}_h{h}")
+            s, _ = petthm("mandel", d, "-thm_fe_degree", degree, "-thm_mesh_size", h)
+            e = s["error"]
+            rows.append({"degree": degree, "mesh_size": h, "cells": s["cells"], "dofs": sum(s["dofs"].values()),
+                         "steps": s["steps"], "wall_s": round(s["wall_time"]["total"], 2),
+                         "p_max_rel": e["p_max_rel"], "cryer_peak_rel": e["mandel_cryer_peak_rel_p0"]})
+            print(f"mandel P{degree} h={h}: {rows[-1]['wall_s']} s, p error {e['p_max_rel']:.2e}, "
+                  f"peak {e['mandel_cryer_peak_rel_p0']:.2e}", flush=True)
+    write_csv(os.path.join(out, "mandel.csv"), rows)
+    return rows
+
+
+def plot_mandel(out, rows):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for ax, key, title, lim in zip(axes, ("p_max_rel", "cryer_peak_rel"),
+                                   ("max nodal pressure error / p0", "Mandel-Cryer peak error / p0"), (1e-2, 5e-3)):
+        for deg, mk in (("1", "s--"), ("2", "o-")):
+            sel = [r for r in rows if str(r["degree"]) == deg]
+            ax.loglog([float(r["wall_s"]) for r in sel], [float(r[key]) for r in sel], mk, label=f"P{deg} u / P1 pm")
+        ax.axhline(lim, color="grey", lw=0.8, ls=":")
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("error / p0")
+        ax.set_title(title)
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "mandel_work_precision.png"), dpi=120)
 
 
 def vi_study(out):
@@ -130,8 +170,15 @@ def plot_sneddon(out, rows):
     fig.savefig(os.path.join(out, "sneddon_work_precision.png"), dpi=120)
 
 
-def markdown(out, sneddon_rows, vi_rows):
+def markdown(out, sneddon_rows, vi_rows, mandel_rows=()):
     lines = []
+    if mandel_rows:
+        lines += ["| mandel | mesh (m) | cells | dofs | steps | wall (s) | max p error / p0 | Cryer peak error / p0 |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for r in mandel_rows:
+            lines.append(f"| P{r['degree']} u / P1 pm | {r['mesh_size']} | {r['cells']} | {r['dofs']} | {r['steps']} | "
+                         f"{float(r['wall_s']):.2f} | {float(r['p_max_rel']):.2e} | {float(r['cryer_peak_rel']):.2e} |")
+        lines.append("")
     if sneddon_rows:
         lines += ["| crack | P | h/R | cells | dofs | wall (s) | w(0) error | L2 error |", "|---|---|---|---|---|---|---|---|"]
         for r in sneddon_rows:
@@ -155,7 +202,7 @@ def markdown(out, sneddon_rows, vi_rows):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "contact"))
-    ap.add_argument("--study", default="sneddon,vi")
+    ap.add_argument("--study", default="sneddon,vi,mandel")
     ap.add_argument("--plot-only", action="store_true")
     a = ap.parse_args(argv)
     studies = a.study.split(",")
@@ -167,11 +214,17 @@ def main(argv=None):
             sneddon_study(a.out)
         if "vi" in studies:
             vi_study(a.out)
+        if "mandel" in studies:
+            mandel_study(a.out)
     sn_rows = read_csv(sn) if os.path.exists(sn) else []
     vi_rows = read_csv(vi) if os.path.exists(vi) else []
+    mn = os.path.join(a.out, "mandel.csv")
+    mn_rows = read_csv(mn) if os.path.exists(mn) else []
     if sn_rows:
         plot_sneddon(a.out, sn_rows)
-    markdown(a.out, sn_rows, vi_rows)
+    if mn_rows:
+        plot_mandel(a.out, mn_rows)
+    markdown(a.out, sn_rows, vi_rows, mn_rows)
 
 
 if __name__ == "__main__":

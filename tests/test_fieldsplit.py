@@ -80,3 +80,16 @@ def test_vi_fieldsplit_scene2(tmp_path, method):
     print(method, "Newton per step max", max(its), "Krylov", s["ksp_iterations"], "vs direct", worst)
     assert s["status"] == "completed" and len(h1) == len(h2) and max(its) <= 15
     assert worst <= 1e-7
+
+
+@pytest.mark.parametrize("method", ["vinewtonrsls", "vinewtonssls"])
+def test_vi_fieldsplit_contact_patch(tmp_path, method):
+    """contact_patch (3D, the fracture cuts the domain, so A_uu is singular:
+    the block above is held only by the contact) with the contact recipe:
+    <= 15 Newton iterations per step and lam = sigma - p, |g| <= 1e-9 m."""
+    _, s = run_petthm("contact_patch", tmp_path, "-options_file", f"{ROOT}/options/solvers/fieldsplit_contact.opts",
+                      "-snes_type", method)
+    its = [int(r["snes_its"]) for r in csv.DictReader(open(tmp_path / "history.csv"))][1:]
+    print(method, "Newton", its, "Krylov", s["ksp_iterations"], s["error"])
+    assert s["status"] == "completed" and max(its) <= 15
+    assert s["error"]["lam_error"] <= 1e-6 and s["error"]["opening_max"] <= 1e-9
