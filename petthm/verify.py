@@ -41,14 +41,25 @@ def jacobian_fd_error(problem, t: float = 0.0, shift: float = 1.0, eps: float = 
     return diff.norm() / max(Jd.norm(), 1e-300)
 
 
-def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps: float = 1e-6,
+def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps=1e-6,
                              seed: int = 0) -> dict:
     """{(test field, trial field): relative error} of every coupling block, the
     check of ``jacobian_fd_error`` with d restricted to the trial field's
     unknowns and the error measured on the test field's rows (so that a wrong
     small block is not hidden by large correct ones).  A block that is zero
     in both the Jacobian and the differences is left out; one that is zero in
-    the Jacobian only has error inf."""
+    the Jacobian only has error inf.
+
+    ``eps`` may be a tuple of steps: each block's error is then the smallest
+    over them.  A small block in rows with large unrelated terms needs a
+    large step (its round-off error grows as 1/step), a block with a kink
+    nearby a small one (truncation); a wrong block is wrong at every step."""
+    if not np.isscalar(eps):
+        out = {}
+        for e in eps:
+            for k, v in jacobian_fd_block_errors(problem, t, shift, e, seed).items():
+                out[k] = min(v, out.get(k, np.inf))
+        return out
     X = problem.X.duplicate()
     problem.X.copy(X)
     rng = np.random.default_rng(seed + problem.dm.comm.rank)

@@ -82,6 +82,26 @@ class Heat:
     aperture: Optional[object] = None
 
 
+@dataclass(frozen=True)
+class ApertureExchange:
+    """Wall heat-transfer coefficient hw = K / a of a deformable fracture
+    (physics.md section 7: K = Nu lambda_f / 2)."""
+    K: float
+    aperture: object
+
+    def value(self, ctx):
+        return self.K / self.aperture.state(ctx).a
+
+    def derivative(self, ctx):
+        """d hw / d a."""
+        return -self.K / self.aperture.state(ctx).a ** 2
+
+
+def _hw(hw, ctx):
+    """A wall coefficient: a number, or per point (``ApertureExchange``)."""
+    return hw.value(ctx) if isinstance(hw, ApertureExchange) else hw
+
+
 # -- helpers ----------------------------------------------------------------------
 def _g0(v):
     """A per-point coefficient (nc, nq) or a number as a g0 block (.., .., 1, 1)."""
@@ -214,7 +234,7 @@ class _HeatPoint:
                 self.lapT = ctx.lap(T)[..., 0]
                 R = R - self.L * self.lapT
             for hw, trace in h.exchange:
-                R = R + hw * (self.Tv - ctx.value(trace)[..., 0])
+                R = R + _hw(hw, ctx) * (self.Tv - ctx.value(trace)[..., 0])
             self.R = R
         self.d = d
 
@@ -263,7 +283,7 @@ def heat_g2_TT(h: Heat, ctx):
     b, m = hp.b, hp.m[..., None]
     g = -b * (1.0 + hp.Tv[..., None] * m)                   # d(-b T)/dT
     if h.supg:
-        extra = hp.C * ctx.shift + sum(hw for hw, _ in h.exchange)
+        extra = hp.C * ctx.shift + sum(_hw(hw, ctx) for hw, _ in h.exchange)
         g = g + (hp.tau * extra)[..., None] * b
         g = g + np.einsum("nqac,nqc->nqa", hp.dZ_db(), b * m)
     return g[:, :, None, :, None]
@@ -298,10 +318,10 @@ def heat_g3_Tp(h: Heat, ctx):
     return np.einsum("nqac,nqce->nqae", D, dbdg)[:, :, None, :, None, :]
 
 
-def heat_g2_exchange(h: Heat, hw: float, ctx):
+def heat_g2_exchange(h: Heat, hw, ctx):
     """SUPG part of d f1/d T_trace: -tau hw b."""
     hp = _HeatPoint(h, ctx)
-    return (-hw * hp.tau[..., None] * hp.b)[:, :, None, :, None]
+    return ((-_hw(hw, ctx) * hp.tau)[..., None] * hp.b)[:, :, None, :, None]
 
 
 def heat_s0_aperture(h: Heat, ctx):
@@ -323,6 +343,9 @@ def heat_s1_aperture(h: Heat, ctx):
             dR = h.capacity * ctx.dot(h.T)[..., 0] + np.einsum("cqa,cqa->cq", db, hp.gT)
             if h.degree > 1:
                 dR = dR - h.conductivity * hp.lapT
+            for hw, trace in h.exchange:
+                if isinstance(hw, ApertureExchange):
+                    dR = dR + hw.derivative(ctx) * (hp.Tv - ctx.value(trace)[..., 0])
             dtau = -hp.tau ** 3 * (hp.A * np.einsum("cqa,cqa->cq", hp.b, db) + hp.B1 * hp.L * h.conductivity)
             s = s + (dtau * hp.R + hp.tau * dR)[..., None] * hp.b + (hp.tau * hp.R)[..., None] * db
     return s
@@ -353,23 +376,38 @@ def heat_terms(h: Heat) -> tuple[list, list]:
 
 
 # -- wall heat exchange (fracture region) ----------------------------------------------
-def exchange_terms(Tf: str, traces: tuple, hw: float) -> tuple[list, list]:
+def exchange_terms(Tf: str, traces: tuple, hw) -> tuple[list, list]:
     """q_h = hw (Tf - Tm_s) on each face s (physics.md section 7): a sink in the
     fracture heat equation and the equal source in the matrix heat equation
-    (test functions of the traces ``Tm-``/``Tm+``)."""
+    (test functions of the traces ``Tm-``/``Tm+``).  ``hw``: a number, or an
+    ``ApertureExchange`` (hw = K/a with the local aperture; then the blocks
+    with respect to lam and u+- through a as well)."""
+    def coefficient(ctx):
+        v = _hw(hw, ctx)
+        return v[..., None] if np.ndim(v) else v
+
     def f0_f(ctx):
-        return hw * sum(ctx.value(Tf) - ctx.value(s) for s in traces)
+        return coefficient(ctx) * sum(ctx.value(Tf) - ctx.value(s) for s in traces)
 
     def f0_m(s, ctx):
-        return hw * (ctx.value(s) - ctx.value(Tf))
+        return coefficient(ctx) * (ctx.value(s) - ctx.value(Tf))
 
-    def const(v, ctx):
-        return np.full((1, 1, 1, 1), v)
+    def coef(v, ctx):
+        return _g0(v * _hw(hw, ctx))
     res = [CellResidual(Tf, f0_f, None, region="fracture")]
     res += [CellResidual(s, partial(f0_m, s), None, region="fracture") for s in traces]
-    jac = [CellJacobian(Tf, Tf, g0=partial(const, hw * len(traces)), region="fracture")]
+    jac = [CellJacobian(Tf, Tf, g0=partial(coef, float(len(traces))), region="fracture")]
     for s in traces:
-        jac += [CellJacobian(Tf, s, g0=partial(const, -hw), region="fracture"),
-                CellJacobian(s, Tf, g0=partial(const, -hw), region="fracture"),
-                CellJacobian(s, s, g0=partial(const, hw), region="fracture")]
+        jac += [CellJacobian(Tf, s, g0=partial(coef, -1.0), region="fracture"),
+                CellJacobian(s, Tf, g0=partial(coef, -1.0), region="fracture"),
+                CellJacobian(s, s, g0=partial(coef, 1.0), region="fracture")]
+    if isinstance(hw, ApertureExchange):
+        def s0_f(ctx):
+            return hw.derivative(ctx) * sum(ctx.value(Tf)[..., 0] - ctx.value(s)[..., 0] for s in traces)
+
+        def s0_m(s, ctx):
+            return hw.derivative(ctx) * (ctx.value(s)[..., 0] - ctx.value(Tf)[..., 0])
+        jac += hw.aperture.jacobians(Tf, s0_f, None)
+        for s in traces:
+            jac += hw.aperture.jacobians(s, partial(s0_m, s), None)
     return res, jac

@@ -151,6 +151,9 @@ class FractureScene(Scene):
         if heat:
             fields += [FieldSpec("Tf", 1, degree, "fracture"), FieldSpec("Tm", 1, degree, "matrix")]
             hw = exchange_coefficient(self[HeatExchange], a, m.fluid_conductivity)
+            if hw is not None and aperture is not None and self[HeatExchange].fracture_heat_exchange.strip().lower() \
+                    == "nusselt":
+                hw = tr.ApertureExchange(NUSSELT * m.fluid_conductivity / 2, aperture)   # hw = Nu lambda_f / (2 a)
             exchange = ()
             if hw is None:
                 ties["Tm"] = "Tf"

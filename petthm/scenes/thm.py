@@ -8,8 +8,10 @@ sections 2-4, 7-11).
   the contact traction falls and the aperture a = ac(lam) + max(g, 0) rises.
 
 The model is the half y >= 0 (the wells lie on the symmetry plane y = 0 and
-carry half their rate).  Tm = Tf on the fracture walls ("equilibrium"
-exchange, the default) or a wall exchange coefficient.  The strain heating
+carry half their rate).  Tm = Tf on the fracture walls ("equilibrium", the
+default), or the walls exchange heat with hw = Nu lambda_f / (2 a) at the
+local aperture ("nusselt": local thermal non-equilibrium, the paper's model;
+on the default mesh it overshoots in the first 1e4 s, docs/scene2.md).  The strain heating
 of section 6 is an option (-thm_thermomechanical_heating, off by default as
 section 6 allows); the rock has no pores.
 """
@@ -54,6 +56,9 @@ class Scene2Params:
     scene2_tip_traction: str = param("insitu", "-", "lam at the fracture front: insitu (its initial value) "
                                      "or zero", choices=("insitu", "zero"))
 
+
+#: a Tf more than this fraction of [Tinj, T0] outside it is reported as a warning
+TF_BOUNDS_WARNING = 0.05
 
 Scene2Wells = with_defaults(Wells, injection_rate=1e-3, injection_temperature=20.0, initial_temperature=80.0,
                             initial_pressure=20e6, production_pressure=20e6)
@@ -210,6 +215,13 @@ class PennyImpermeable(MechanicsScene, FractureScene):
         viol = max(0.0, lo - out["Tf_min"], out["Tf_max"] - hi) / max(hi - lo, 1e-300)
         for k, val in (("Tf_bounds_violation", viol), ("aperture_identity", out["aperture_identity"])):
             self._worst[k] = max(self._worst.get(k, 0.0), val)
+        if viol > TF_BOUNDS_WARNING and not getattr(self, "_warned", False) and comm.rank == 0:
+            import sys
+            self._warned = True
+            print(f"warning: at t = {t:.4g} s Tf = [{out['Tf_min']:.2f}, {out['Tf_max']:.2f}] degC leaves "
+                  f"[{lo:g}, {hi:g}] by {100 * viol:.0f} % of the range (max in summary.json: "
+                  "Tf_bounds_violation); refine the fracture mesh or use -thm_fracture_heat_exchange "
+                  "equilibrium", file=sys.stderr, flush=True)
         out.update(self.balance_monitors(problem, t, X))
         self._state = (x, g, lam, a, v)
         self._last = out
