@@ -11,7 +11,6 @@ import math
 import os
 import time
 
-import numpy as np
 from petsc4py import PETSc
 
 from . import __version__, compat, params as P

@@ -220,7 +220,6 @@ class Discretisation:
         interleaved per point, as PetscSectionSetUp lays them out) and checked
         against the section at a sample of points.
         """
-        m = self.mesh
         pstart, pend = self.dm.getChart()
         ndof = np.zeros(pend - pstart, dtype=np.int64)
         fstart = {}

@@ -11,7 +11,6 @@ options database has no value for the key.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from typing import Callable
 

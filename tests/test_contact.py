@@ -6,7 +6,7 @@ import pytest
 
 from petthm.verify import jacobian_fd_error
 
-from conftest import build_problem, run_petthm
+from conftest import build_problem
 
 SNEDDON_2D = ("-thm_sneddon_dim", 2, "-thm_sneddon_radius", 50, "-thm_sneddon_crack_size", 0.025)
 

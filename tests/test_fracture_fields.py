@@ -5,7 +5,7 @@ import pytest
 from petsc4py import PETSc
 
 from petthm import fracture as F, meshing as M
-from petthm.assembly import Assembler, FieldScale
+from petthm.assembly import FieldScale
 from petthm.fields import Discretisation, FieldSpec
 from petthm.mesh import Mesh, distribute, label_boundaries, read_plex
 from petthm.model import CellJacobian, CellResidual, Model

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from petthm import params as P
 from petthm.app import Run, make_scene
 from petthm.fields import Discretisation
 from petthm.model import CellJacobian

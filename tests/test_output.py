@@ -1,6 +1,5 @@
 """Run output: summary.json, history.csv and XDMF that meshio reads back."""
 import csv
-import json
 
 import meshio
 import numpy as np

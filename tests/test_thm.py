@@ -105,3 +105,14 @@ def test_thermomechanical_heating_jacobian(tmp_path, scene, opts):
     err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=1e-2)
     print(scene, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
     assert err[("Tm", "u")] <= 1e-6 and err[("Tm", "Tm")] <= 1e-6
+
+
+def test_scene2_refuses_an_open_start(tmp_path, petthm_run):
+    """A fluid pressure above the normal stress would start the fracture open:
+    a one-line error naming the options, no traceback."""
+    proc, _ = petthm_run("penny_impermeable", tmp_path, "-thm_initial_pressure", 70e6, "-thm_scene2_layer", 0,
+                         "-thm_scene2_fracture_size", 40, check=False)
+    out = proc.stdout + proc.stderr
+    print(out)
+    assert proc.returncode != 0 and "Traceback" not in out
+    assert "-thm_initial_pressure" in out and "-thm_scene2_normal_stress" in out

@@ -182,7 +182,7 @@ class Sneddon(MechanicsScene):
         return np.linalg.norm(x[..., :2], axis=-1) if self[SneddonParams].sneddon_dim == 3 else np.abs(x[..., 0])
 
     def build(self, mesh, degree):
-        p, rock = self[SneddonParams], self[ElasticRock]
+        p = self[SneddonParams]
         if mesh.dim != p.sneddon_dim:
             raise InputError(f"option -thm_sneddon_dim = {p.sneddon_dim} but the mesh is {mesh.dim}D")
         sn = p.sneddon_normal_stress

@@ -397,7 +397,7 @@ class RadialFlow(FractureScene):
         return p.radial_rim_pressure + w.injection_rate / (2 * np.pi * Th) * np.log(p.radial_radius / np.maximum(r, 1e-300))
 
     def build(self, mesh, degree):
-        p, w = self[RadialParams], self[Wells]
+        p = self[RadialParams]
         self._worst = {}
         model = self.fracture_model(mesh, degree, heat=False)
         model.points.extend(self.well_terms(mesh, tuple(self.centre()), None, heat=False))

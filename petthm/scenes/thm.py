@@ -137,7 +137,7 @@ class PennyImpermeable(MechanicsScene, FractureScene):
 
     def build(self, mesh, degree):
         self.check(mesh)
-        p, w, rock, m = self[Scene2Params], self[Wells], self[ElasticRock], self.material
+        p, w, rock = self[Scene2Params], self[Wells], self[ElasticRock]
         T0, Ti = w.initial_temperature + CELSIUS, w.injection_temperature + CELSIUS
         self._worst, self._final = {}, None
         el = pe.Elastic(rock.rock_youngs_modulus, rock.rock_poisson_ratio, 3, T="Tm",
