@@ -206,18 +206,22 @@ class Assembler:
         """``region``: the name of the elements integrated over ("matrix": the
         mesh's cells; "fracture": ``disc.regions["fracture"]``, a
         ``fracture.FractureSurface``); only the model's terms on that region
-        are assembled.  ``inv_rscale``: per local dof, 1/(residual scale of
+        are assembled.  "REGION@lumped": the same elements with the vertex
+        quadrature rule (row-sum lumping of P1 mass-type terms: capacity,
+        wall exchange), which keeps the discrete maximum principle where the
+        consistent mass matrix breaks it (thin elements, small steps).  ``inv_rscale``: per local dof, 1/(residual scale of
         the row it is added to) (default: from ``scales``)."""
         self.disc, self.region = disc, region
+        self.base, _, variant = region.partition("@")
         self.model = Model(model.fields, [t for t in model.residuals if t.region == region],
                            [t for t in model.jacobians if t.region == region],
                            model.facets if region == "matrix" else [])
-        self.mesh = disc.regions[region]
+        self.mesh = disc.regions[self.base]
         self.scales = scales
         self.inv_rscale = inv_rscale if inv_rscale is not None else self.default_inv_rscale(disc, scales)
         dim = self.mesh.rdim
         pmax = max(f.degree for f in disc.fields)
-        self.rule = fe.rule(dim, quad_degree or 2 * pmax)
+        self.rule = fe.vertex_rule(dim) if variant == "lumped" else fe.rule(dim, quad_degree or 2 * pmax)
         self._tabs = {p: _Tab(dim, p, self.rule.points) for p in (1, 2)}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
         self._ref_cache = {}
@@ -236,7 +240,7 @@ class Assembler:
 
     def dofs(self, name) -> np.ndarray:
         """Element dofs of a field (or trace, "Tm+") on this region's elements."""
-        return self.disc.region_dofs(self.region, name)
+        return self.disc.region_dofs(self.base, name)
 
     def scale(self, name) -> FieldScale:
         return self.scales[self.disc.field(name).name]

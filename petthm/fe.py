@@ -89,6 +89,13 @@ def _collapsed(dim: int, degree: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=None)
+def vertex_rule(dim: int) -> Rule:
+    """The vertices of the reference simplex with equal weights (exact for
+    P1; used for row-sum lumping of P1 mass-type terms)."""
+    pts = np.vstack([np.zeros((1, dim)), np.eye(dim)])
+    return Rule(pts, np.full(dim + 1, REFERENCE_VOLUME[dim] / (dim + 1)), 1)
+
+
 def rule(dim: int, degree: int) -> Rule:
     """A quadrature rule on the reference simplex exact to ``degree``."""
     degree = max(int(degree), 1)

@@ -25,9 +25,12 @@ def test_scene2_jacobian_blocks_match_finite_differences(tmp_path, degree, excha
     beta_f, the face loads and the thermal strain."""
     problem = build_problem(tmp_path, "penny_impermeable", thm_fe_degree=degree,
                             thm_fracture_heat_exchange=exchange, **COARSE)
-    # two steps: the Tm-lam block of the wall exchange is small in rows with
-    # large capacity and conduction terms (round-off 4.7e-6 at 1e-6, 7e-8 at 1e-4)
-    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=(1e-6, 1e-4))
+    # several steps, the best per block: the Tm-lam block of the wall exchange
+    # is small in rows with large capacity and conduction terms (round-off
+    # 4.7e-6 at 1e-6, 7e-8 at 1e-4), and with the lumped capacity the Tm-Tf
+    # coupling is conduction alone (round-off 0.04 at 1e-6, falling as 1/step;
+    # those rows are linear, so a step of 1 is exact); a wrong block is wrong at every step
+    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=(1e-6, 1e-4, 1e-2, 1.0))
     print(degree, exchange, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
     assert COUPLINGS <= set(err)
     if exchange == "nusselt":            # hw = Nu lambda_f / (2 a): the rock heat depends on lam and u+-
@@ -77,7 +80,8 @@ def test_scene2_thermal_shock_230K(tmp_path, petthm_run):
     """Extreme case: 20 degC water into 250 degC rock (a 230 K shock at the
     injector).  The thermal stress exceeds the contact traction, so the
     fracture opens near the injector (active-set changes in the coupled
-    solve); the run completes without NaN and with lam >= 0."""
+    solve); the run completes without NaN and with lam >= 0 (to round-off:
+    the VI bound acts on the scaled unknown)."""
     _, s = petthm_run("penny_impermeable", tmp_path, "-thm_fe_degree", 1, "-thm_scene2_fracture_size", 20,
                       "-thm_scene2_well_size", 10, "-thm_scene2_layer", 0, "-thm_final_time", 1e6,
                       "-thm_initial_temperature", 250)
@@ -86,7 +90,7 @@ def test_scene2_thermal_shock_230K(tmp_path, petthm_run):
     vals = np.array([[float(r[k]) for k in ("injection_pressure", "lam_min", "aperture_max", "Tf_min")] for r in h])
     print("open vertices", opened, "rejected", s["rejected_steps"], "last", vals[-1], s["balance_max"])
     assert s["status"] == "completed" and np.isfinite(vals).all()
-    assert opened > 0 and vals[:, 1].min() >= 0.0
+    assert opened > 0 and vals[:, 1].min() >= -1e-12 * 40e6      # lam >= 0 to round-off of its scale
     assert s["balance_max"]["Tf_bounds_violation"] <= 0.05
 
 

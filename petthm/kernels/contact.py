@@ -170,13 +170,14 @@ class Aperture:
             ctx._cache[key] = ApertureState(ac + H * g, dac, H, dac * ctx.dot(m.lam)[..., 0] + H * gdot)
         return ctx._cache[key]
 
-    def jacobians(self, test: str, s0: Callable, s1: Optional[Callable]) -> list:
+    def jacobians(self, test: str, s0: Callable, s1: Optional[Callable], region: Optional[str] = None) -> list:
         """Blocks d(residual of ``test``)/d(lam, u+, u-) through the aperture.
 
         ``s0(ctx)`` (nc, nq) and ``s1(ctx)`` (nc, nq, d) are the derivatives of
         the residual's f0 and f1 with respect to a, where a and da/dt change
         together (d(da/dt)/d(unknown) = shift da/d(unknown), since ac' and H
-        are piecewise constant).  ``s1`` None: f1 does not depend on a."""
+        are piecewise constant).  ``s1`` None: f1 does not depend on a.
+        ``region``: where the term is integrated (default: the fracture)."""
         m = self.mech
 
         def g0_lam(ctx):
@@ -192,8 +193,9 @@ class Aperture:
             return sign * (self.state(ctx).H[..., None] * s1(ctx))[:, :, None, :, None] * \
                 normals(ctx)[:, :, None, None, :]
         has1 = s1 is not None
-        out = [CellJacobian(test, m.lam, g0=g0_lam, g2=g2_lam if has1 else None, region=m.region)]
+        region = region or m.region
+        out = [CellJacobian(test, m.lam, g0=g0_lam, g2=g2_lam if has1 else None, region=region)]
         for side, sign in (("+", 1.0), ("-", -1.0)):
             out.append(CellJacobian(test, m.u + side, g0=partial(g0_u, sign),
-                                    g2=partial(g2_u, sign) if has1 else None, region=m.region))
+                                    g2=partial(g2_u, sign) if has1 else None, region=region))
         return out

@@ -80,6 +80,7 @@ class Heat:
     supg: bool = True
     exchange: tuple = ()            # (hw, trace name) pairs: R += hw (T - T_trace) (fracture)
     aperture: Optional[object] = None
+    lumped: bool = False            # capacity term by row-sum lumping (P1, no aperture)
 
 
 @dataclass(frozen=True)
@@ -254,7 +255,14 @@ def _conduction(hp: _HeatPoint, gT):
     return L * gT if np.isscalar(L) else np.einsum("ab,cqb->cqa", L, gT)
 
 
+def heat_f0_capacity(h: Heat, ctx):
+    """C dT/dt alone (the lumped capacity term)."""
+    return (h.capacity * ctx.dot(h.T)[..., 0])[..., None]
+
+
 def heat_f0(h: Heat, ctx):
+    if h.lumped:
+        return np.zeros(ctx.shape + (1,))
     ap = _aperture(h, ctx)
     if ap is None:
         return (h.capacity * ctx.dot(h.T)[..., 0])[..., None]
@@ -357,10 +365,17 @@ def heat_terms(h: Heat) -> tuple[list, list]:
         raise ValueError("a conductivity tensor is only supported without advection")
     if h.aperture is not None and not np.isscalar(h.conductivity):
         raise ValueError("a deformable fracture takes a scalar conductivity")
+    if h.lumped and (h.aperture is not None or h.degree != 1):
+        raise ValueError("a lumped capacity needs P1 and a fixed aperture")
     supg = advect and h.supg
     hh = h if advect else replace(h, fluid_rho_c=0.0, flow=None, supg=False)
     res = [CellResidual(h.T, partial(heat_f0, hh), partial(heat_f1, hh), region=h.region)]
-    jac = [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh) if h.capacity else None,
+    if h.lumped:
+        res.append(CellResidual(h.T, partial(heat_f0_capacity, hh), None, region=h.region + "@lumped"))
+        jac = [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh), region=h.region + "@lumped")]
+    else:
+        jac = []
+    jac += [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh) if h.capacity and not h.lumped else None,
                         g2=partial(heat_g2_TT, hh) if advect else None,
                         g3=partial(heat_g3_TT, hh),
                         g2_lap=partial(heat_g2lap_TT, hh) if supg and h.degree > 1 else None,
@@ -376,12 +391,14 @@ def heat_terms(h: Heat) -> tuple[list, list]:
 
 
 # -- wall heat exchange (fracture region) ----------------------------------------------
-def exchange_terms(Tf: str, traces: tuple, hw) -> tuple[list, list]:
+def exchange_terms(Tf: str, traces: tuple, hw, lumped: bool = False) -> tuple[list, list]:
     """q_h = hw (Tf - Tm_s) on each face s (physics.md section 7): a sink in the
     fracture heat equation and the equal source in the matrix heat equation
     (test functions of the traces ``Tm-``/``Tm+``).  ``hw``: a number, or an
     ``ApertureExchange`` (hw = K/a with the local aperture; then the blocks
-    with respect to lam and u+- through a as well)."""
+    with respect to lam and u+- through a as well).  ``lumped``: integrated
+    with the vertex rule (row-sum lumping, P1 fields)."""
+    region = "fracture@lumped" if lumped else "fracture"
     def coefficient(ctx):
         v = _hw(hw, ctx)
         return v[..., None] if np.ndim(v) else v
@@ -394,20 +411,20 @@ def exchange_terms(Tf: str, traces: tuple, hw) -> tuple[list, list]:
 
     def coef(v, ctx):
         return _g0(v * _hw(hw, ctx))
-    res = [CellResidual(Tf, f0_f, None, region="fracture")]
-    res += [CellResidual(s, partial(f0_m, s), None, region="fracture") for s in traces]
-    jac = [CellJacobian(Tf, Tf, g0=partial(coef, float(len(traces))), region="fracture")]
+    res = [CellResidual(Tf, f0_f, None, region=region)]
+    res += [CellResidual(s, partial(f0_m, s), None, region=region) for s in traces]
+    jac = [CellJacobian(Tf, Tf, g0=partial(coef, float(len(traces))), region=region)]
     for s in traces:
-        jac += [CellJacobian(Tf, s, g0=partial(coef, -1.0), region="fracture"),
-                CellJacobian(s, Tf, g0=partial(coef, -1.0), region="fracture"),
-                CellJacobian(s, s, g0=partial(coef, 1.0), region="fracture")]
+        jac += [CellJacobian(Tf, s, g0=partial(coef, -1.0), region=region),
+                CellJacobian(s, Tf, g0=partial(coef, -1.0), region=region),
+                CellJacobian(s, s, g0=partial(coef, 1.0), region=region)]
     if isinstance(hw, ApertureExchange):
         def s0_f(ctx):
             return hw.derivative(ctx) * sum(ctx.value(Tf)[..., 0] - ctx.value(s)[..., 0] for s in traces)
 
         def s0_m(s, ctx):
             return hw.derivative(ctx) * (ctx.value(s)[..., 0] - ctx.value(Tf)[..., 0])
-        jac += hw.aperture.jacobians(Tf, s0_f, None)
+        jac += hw.aperture.jacobians(Tf, s0_f, None, region)
         for s in traces:
-            jac += hw.aperture.jacobians(s, partial(s0_m, s), None)
+            jac += hw.aperture.jacobians(s, partial(s0_m, s), None, region)
     return res, jac

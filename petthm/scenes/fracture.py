@@ -123,11 +123,13 @@ class FractureScene(Scene):
         return self[FractureProps].fracture_aperture
 
     def fracture_model(self, mesh, degree, *, heat: bool, permeability=None, matrix_storage=0.0,
-                       matrix_thermal_storage=0.0, rock_conductivity=None, aperture=None) -> Model:
+                       matrix_thermal_storage=0.0, rock_conductivity=None, aperture=None,
+                       lumped: bool = False) -> Model:
         """Fields, terms and ties: pf (+ Tf, Tm with ``heat``; + pm with a
         ``permeability`` tensor).  ``aperture``: a ``contact.Aperture`` (a
         deformable fracture; the caller adds u and lam), else the fixed
-        ``reference_aperture``."""
+        ``reference_aperture``.  ``lumped`` (P1): the rock's heat capacity and
+        the wall exchange by row-sum lumping."""
         fl, m = self[FluidFlow], self.material
         mu = _viscosity(fl)
         a = self.reference_aperture()
@@ -162,14 +164,14 @@ class FractureScene(Scene):
                     raise InputError("option -thm_fracture_heat_exchange: only 'equilibrium' is implemented "
                                      "with a permeable matrix (the heat carried by leakoff needs the wall flux)")
                 exchange = tuple((hw, s) for s in ("Tm-", "Tm+"))
-                r, j = tr.exchange_terms("Tf", ("Tm-", "Tm+"), hw)
+                r, j = tr.exchange_terms("Tf", ("Tm-", "Tm+"), hw, lumped=lumped)
                 res, jac = res + r, jac + j
             frac_heat = tr.Heat("fracture", "Tf", unit * m.fluid_rho_c, unit * m.fluid_conductivity, m.fluid_rho_c,
                                 frac_flow, degree, True, exchange, aperture)
             r, j = tr.heat_terms(frac_heat)
             res, jac = res + r, jac + j
             lam = m.conductivity if rock_conductivity is None else rock_conductivity
-            mat_heat = tr.Heat("matrix", "Tm", m.rho_c, lam, m.fluid_rho_c, matrix_flow, degree, True)
+            mat_heat = tr.Heat("matrix", "Tm", m.rho_c, lam, m.fluid_rho_c, matrix_flow, degree, True, lumped=lumped)
             r, j = tr.heat_terms(mat_heat)
             res, jac = res + r, jac + j
         self._flows = (frac_flow, matrix_flow)

@@ -51,6 +51,8 @@ class Scene2Params:
                                 "(layered mesh, growing by -thm_scene2_layer_growth); 0: unstructured tetrahedra",
                                 lo=0.0)
     scene2_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
+    scene2_lumped_heat: bool = param(True, "-", "row-sum lumping of the rock heat capacity and the wall "
+                                     "exchange (keeps Tf and Tm within [Tinj, T0] on thin layers)")
     thermomechanical_heating: bool = param(False, "-", "the strain heating beta_s K Tm d(div u)/dt of "
                                            "physics.md section 6 (an energy source the balance leaves out)")
     scene2_tip_traction: str = param("insitu", "-", "lam at the fracture front: insitu (its initial value) "
@@ -147,7 +149,7 @@ class PennyImpermeable(MechanicsScene, FractureScene):
                                          gap_tolerance=GAP_TOLERANCE * u_scale)
         self.law = self[Joint].law()
         aperture = ct.Aperture(self.mech, self.law)
-        model = self.fracture_model(mesh, 1, heat=True, aperture=aperture)
+        model = self.fracture_model(mesh, 1, heat=True, aperture=aperture, lumped=p.scene2_lumped_heat)
         r1, j1 = pe.elastic_terms(el)
         r2, j2 = ct.fracture_mechanics_terms(self.mech)
         model.fields = [FieldSpec("u", 3, degree), FieldSpec("lam", 1, 1, "fracture")] + model.fields
