@@ -34,7 +34,7 @@ CASES = {
     "thin": ("first layer 0.25 m growing by 1.3", ["-thm_scene2_layer", "0.25", "-thm_scene2_layer_growth", "1.3"]),
     "tet": ("isotropic tetrahedra (no layers)", ["-thm_scene2_layer", "0"]),
     "box5": ("domain 5 R", ["-thm_scene2_box", "5"]),
-    "nusselt": ("wall exchange hw = Nu lambda_f / (2 a0)", ["-thm_fracture_heat_exchange", "nusselt"]),
+    "nusselt": ("wall exchange hw = Nu lambda_f / (2 a), local a", ["-thm_fracture_heat_exchange", "nusselt"]),
     "dt": ("steps x1.1 up to 5e6 s", ["-thm_dt_growth", "1.1", "-thm_dt_max", "5e6"]),
     "tip0": ("lam = 0 at the front", ["-thm_scene2_tip_traction", "zero"]),
 }
