@@ -206,10 +206,11 @@ class Problem:
         best = (float(d[k]), float(v[k])) if len(d) else (np.inf, 0.0)
         return self.dm.comm.tompi4py().allreduce(best, op=MPI.MINLOC)[1]
 
-    def max_nodal_error(self, name: str, exact: Callable, X: PETSc.Vec | None = None, t: float = 0.0) -> float:
-        """max over all nodes and ranks of |value - exact(node coordinates)| of a scalar field (SI)."""
+    def max_nodal_error(self, name: str, exact: Callable, X: PETSc.Vec | None = None, t: float = 0.0,
+                        component: int = 0) -> float:
+        """max over all nodes and ranks of |value - exact(node coordinates)| of a field's component (SI)."""
         from mpi4py import MPI
-        v = self.field_values(name, X, t)[:, 0]
+        v = self.field_values(name, X, t)[:, component]
         x = self.disc.field_node_coordinates(name)
         err = float(np.abs(v - exact(x)).max()) if len(v) else 0.0
         return self.dm.comm.tompi4py().allreduce(err, op=MPI.MAX)

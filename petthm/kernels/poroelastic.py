@@ -8,6 +8,8 @@ u is the displacement from the in-situ state).  Weak form:
 
     int grad w : sigma - int w . F - int_N w . t = 0
 
+(F a constant body force, ``Elastic.body_force``: e.g. the rock's weight).
+
 Flow: alpha d(div u)/dt is added to the matrix flow residual (the rest of
 section 5 is ``transport.Flow`` with storage S = 1/M = phi c_f + (alpha - phi)/K_s).
 In 2D the equations are those of plane strain (the same formulas with d = 2).
@@ -38,6 +40,7 @@ class Elastic:
     T: Optional[str] = None           # temperature field (thermal strain)
     thermal_expansion: float = 0.0    # volumetric beta_s
     T_ref: float = 0.0
+    body_force: tuple = ()            # F (N/m3), constant: -div sigma = F
     region: str = "matrix"
 
     @property
@@ -72,6 +75,11 @@ def stress(el: Elastic, ctx):
     return 2 * el.shear * eps + iso[..., None, None] * np.eye(el.dim)
 
 
+def _body_f0(el: Elastic, ctx):
+    """-F: the body force's part of int grad w : sigma - int w . F."""
+    return np.broadcast_to(-np.asarray(el.body_force, dtype=float), ctx.shape + (el.dim,))
+
+
 def _g3_uu(el: Elastic, ctx):
     return el.stiffness()[None, None]
 
@@ -104,7 +112,8 @@ def _biot_g1(el: Elastic, ctx):
 
 def elastic_terms(el: Elastic) -> tuple[list, list]:
     """Momentum balance of ``el.u`` and the Biot term of the flow equation."""
-    res = [CellResidual(el.u, None, partial(stress, el), region=el.region)]
+    res = [CellResidual(el.u, partial(_body_f0, el) if el.body_force else None, partial(stress, el),
+                        region=el.region)]
     jac = [CellJacobian(el.u, el.u, g3=partial(_g3_uu, el), region=el.region)]
     if el.p is not None and el.biot:
         jac.append(CellJacobian(el.u, el.p, g2=partial(_g2_coupling, el.biot, el.dim), region=el.region))

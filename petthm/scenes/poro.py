@@ -350,6 +350,68 @@ class Mandel(Scene):
 
 # ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
+class GravityParams:
+    """Elastic column under its own weight (gravity_column)"""
+    rock_youngs_modulus: float = param(37.5e9, "Pa", "Young's modulus E", lo=0.0, lo_open=True)
+    rock_poisson_ratio: float = param(0.25, "-", "Poisson ratio nu", lo=0.0, hi=0.4999)
+    rock_density: float = param(2650.0, "kg/m3", "rock density rho", lo=0.0, lo_open=True)
+    gravity: float = param(9.81, "m/s2", "gravitational acceleration g (downwards, -y)", lo=0.0)
+    gravity_height: float = param(100.0, "m", "column height H", lo=0.0, lo_open=True)
+    gravity_width: float = param(10.0, "m", "column width", lo=0.0, lo_open=True)
+
+
+@register
+class GravityColumn(Scene):
+    """-div sigma = F with F = (0, -rho g): bottom fixed, sides on rollers,
+    top free.  u_y = -rho g / (lambda + 2G) (H y - y^2/2) is quadratic, so P2
+    reproduces it to round-off (a patch test of the body force)."""
+    direct_solve = True
+    name = "gravity_column"
+    description = "elastic column under its own weight (body force): quadratic settlement, exact for P2"
+    parameter_sets = (GravityParams,)
+    time = TimeDefaults(final_time=1.0, dt_initial=1.0, mesh_size=5.0)
+    history_columns = ("u_top", "u_top_exact", "u_max_error")
+
+    def boundaries(self):
+        p = self[GravityParams]
+        return {"bottom": lambda x: np.isclose(x[:, 1], 0.0),
+                "sides": lambda x: np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], p.gravity_width)}
+
+    def generate_mesh(self, path, size):
+        p = self[GravityParams]
+        return meshing.box(path, [p.gravity_width, p.gravity_height], size)
+
+    def exact_uy(self, y):
+        p = self[GravityParams]
+        el = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, 2)
+        return -p.rock_density * p.gravity / (el.lame + 2 * el.shear) * (p.gravity_height * y - 0.5 * y ** 2)
+
+    def build(self, mesh, degree):
+        p = self[GravityParams]
+        el = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, mesh.dim,
+                        body_force=(0.0, -p.rock_density * p.gravity))
+        res, jac = pe.elastic_terms(el)
+        model = Model([FieldSpec("u", mesh.dim, degree)], res, jac)
+        zero = lambda x, t: np.zeros(len(x))  # noqa: E731
+        bcs = [Dirichlet("u", "bottom", lambda x, t: np.zeros((len(x), 2))),
+               Dirichlet("u", "sides", zero, components=(0,))]
+        scale = abs(float(self.exact_uy(np.array([p.gravity_height]))[0])) or 1.0
+        return model, bcs, {"u": FieldScale(scale)}, {}
+
+    def monitors(self, problem, t, X=None):
+        H = self[GravityParams].gravity_height
+        top = float(self.exact_uy(np.array([H]))[0])
+        err = problem.max_nodal_error("u", lambda x: self.exact_uy(x[:, 1]), X, t, component=1)
+        self._last = {"u_top": problem.point_value("u", (0.0, H), X, t, component=1), "u_top_exact": top,
+                      "u_max_error": err / abs(top)}
+        return self._last
+
+    def report(self, problem, t):
+        return {"error": {"u_max_rel": self._last["u_max_error"]}}
+
+
+# ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
 class ThermalStressParams:
     """Cooling of a laterally constrained half-space (thermal_stress; verification.md 7b)"""
     rock_youngs_modulus: float = param(37.5e9, "Pa", "drained Young's modulus E", lo=0.0, lo_open=True)
