@@ -93,3 +93,22 @@ def test_vi_fieldsplit_contact_patch(tmp_path, method):
     print(method, "Newton", its, "Krylov", s["ksp_iterations"], s["error"])
     assert s["status"] == "completed" and max(its) <= 15
     assert s["error"]["lam_error"] <= 1e-6 and s["error"]["opening_max"] <= 1e-9
+
+
+@pytest.mark.parametrize("method", ["vinewtonrsls", "vinewtonssls"])
+def test_vi_fieldsplit_fracture_inflation(tmp_path, method):
+    """fracture_inflation (u, lam, pf: the crack opens under injection) with
+    the contact recipe: <= 15 Newton iterations per step and the direct
+    solve's injection pressure."""
+    run_petthm("fracture_inflation", tmp_path / "direct")
+    out = tmp_path / method
+    _, s = run_petthm("fracture_inflation", out, "-options_file", f"{ROOT}/options/solvers/fieldsplit_contact.opts",
+                      "-snes_type", method)
+    h1 = list(csv.DictReader(open(tmp_path / "direct" / "history.csv")))
+    h2 = list(csv.DictReader(open(out / "history.csv")))
+    its = [int(r["snes_its"]) for r in h2[1:]]
+    worst = max(abs(float(a["injection_pressure"]) - float(b["injection_pressure"])) / float(a["injection_pressure"])
+                for a, b in zip(h1, h2))
+    print(method, "Newton per step max", max(its), "Krylov", s["ksp_iterations"], "vs direct", worst)
+    assert s["status"] == "completed" and len(h1) == len(h2) and max(its) <= 15
+    assert worst <= 1e-7
