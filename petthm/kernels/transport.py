@@ -250,7 +250,7 @@ class _HeatPoint:
 
 def _conduction(hp: _HeatPoint, gT):
     L = hp.L
-    if np.ndim(L) == 2:                                              # per point (deformable fracture)
+    if hp.ap is not None:                                            # per point (deformable fracture)
         return L[..., None] * gT
     return L * gT if np.isscalar(L) else np.einsum("ab,cqb->cqa", L, gT)
 
@@ -301,7 +301,7 @@ def heat_g3_TT(h: Heat, ctx):
     d = ctx.dim
     hp = _HeatPoint(h, ctx) if (h.supg or h.aperture is not None) else None
     L = h.conductivity if hp is None else hp.L
-    if np.ndim(L) == 2:
+    if h.aperture is not None:                                       # per point (deformable fracture)
         g = L[..., None, None] * np.eye(d)
     else:
         g = (L * np.eye(d) if np.isscalar(L) else np.asarray(L))[None, None]
