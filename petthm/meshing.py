@@ -56,19 +56,8 @@ def _grade(gmsh, dim: int, lengths: Sequence[float], size: float, grading: Gradi
         ent = occ.addPlaneSurface([loop])
         kind = "SurfacesList"
     occ.synchronize()
-    mf = gmsh.model.mesh.field
-    dist = mf.add("Distance")
-    mf.setNumbers(dist, kind, [ent])
-    mf.setNumber(dist, "Sampling", 200)
-    thr = mf.add("Threshold")
-    mf.setNumber(thr, "InField", dist)
-    mf.setNumber(thr, "SizeMin", grading.size_min)
-    mf.setNumber(thr, "SizeMax", size)
-    mf.setNumber(thr, "DistMin", 0.0)
-    mf.setNumber(thr, "DistMax", grading.distance)
-    mf.setAsBackgroundMesh(thr)
-    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    thr = _threshold(gmsh.model.mesh.field, kind, [ent], grading.size_min, size, grading.distance, sampling=200)
+    _background_size(gmsh, [thr])
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
 
 
@@ -168,18 +157,9 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     _, mapping = occ.fragment([(dim, dom)], tools + wpts)
     occ.synchronize()
     mapping = _drop_outside(gmsh, dim, mapping)
-    cells = [t for (d, t) in mapping[0] if d == dim]
-    gmsh.model.addPhysicalGroup(dim, cells, 1)
-    outer = gmsh.model.getBoundary([(dim, c) for c in cells], combined=True, oriented=False)
-    gmsh.model.addPhysicalGroup(dim - 1, [t for (_, t) in outer], BOUNDARY_TAG)
-    on_outer = {t for (_, t) in gmsh.model.getBoundary(outer, combined=False, oriented=False)}
+    on_outer = _tag_domain(gmsh, dim, [t for (d, t) in mapping[0] if d == dim])
     for i, m in enumerate(mapping[1:1 + len(fractures)]):
-        ents = [t for (d, t) in m if d == dim - 1]
-        gmsh.model.addPhysicalGroup(dim - 1, ents, FRACTURE_TAG0 + i)
-        rim = gmsh.model.getBoundary([(dim - 1, e) for e in ents], combined=True, oriented=False)
-        tip = [t for (_, t) in rim if t not in on_outer]
-        if tip:
-            gmsh.model.addPhysicalGroup(dim - 2, tip, TIP_TAG0 + i)
+        _tag_fracture(gmsh, dim, i, [t for (d, t) in m if d == dim - 1], on_outer)
     for i, m in enumerate(mapping[1 + len(fractures):]):
         gmsh.model.addPhysicalGroup(0, [t for (d, t) in m if d == 0], WELL_TAG0 + i)
     fine = [f.size or size for f in fractures] + ([well_size] if wells and well_size else [])
@@ -195,11 +175,7 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
         if wells and well_size:
             ents = [t for m in mapping[1 + len(fractures):] for (d, t) in m if d == 0]
             fields.append(_threshold(mf, "PointsList", ents, well_size, size, grading_distance))
-        mn = mf.add("Min")
-        mf.setNumbers(mn, "FieldsList", fields)
-        mf.setAsBackgroundMesh(mn)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+        _background_size(gmsh, fields)
     return _write(gmsh, dim, path)
 
 
@@ -246,14 +222,8 @@ def layered_half_box_with_disc(path: str, half: float, radius: float, size: floa
     for dz in (half, -half):
         occ.extrude([(2, t) for t in plane], 0.0, 0.0, dz, numElements=[1] * len(h), heights=cum, recombine=False)
     occ.synchronize()
-    cells = [t for (_, t) in gmsh.model.getEntities(3)]
-    gmsh.model.addPhysicalGroup(3, cells, 1)
-    outer = gmsh.model.getBoundary([(3, c) for c in cells], combined=True, oriented=False)
-    gmsh.model.addPhysicalGroup(2, [t for (_, t) in outer], BOUNDARY_TAG)
-    on_outer = {t for (_, t) in gmsh.model.getBoundary(outer, combined=False, oriented=False)}
-    gmsh.model.addPhysicalGroup(2, on_disc, FRACTURE_TAG0)
-    rim = gmsh.model.getBoundary([(2, e) for e in on_disc], combined=True, oriented=False)
-    gmsh.model.addPhysicalGroup(1, [t for (_, t) in rim if t not in on_outer], TIP_TAG0)
+    on_outer = _tag_domain(gmsh, 3, [t for (_, t) in gmsh.model.getEntities(3)])
+    _tag_fracture(gmsh, 3, 0, on_disc, on_outer)
     points = [(t, np.array(gmsh.model.getValue(0, t, []))) for (_, t) in gmsh.model.getEntities(0)]
     well_tags = []
     for i, w in enumerate(wells):
@@ -264,13 +234,40 @@ def layered_half_box_with_disc(path: str, half: float, radius: float, size: floa
     fields = [_threshold(mf, "SurfacesList", on_disc, disc_size, size, radius)]
     if well_tags and well_size:
         fields.append(_threshold(mf, "PointsList", well_tags, well_size, size, radius))
+    _background_size(gmsh, fields)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    return _write(gmsh, 3, path)
+
+
+def _tag_domain(gmsh, dim: int, cells: list) -> set:
+    """Physical groups of the domain's cells (tag 1) and of its outer boundary
+    (``BOUNDARY_TAG``).  Returns the entities that bound the outer boundary:
+    a fracture's rim there is not a tip."""
+    gmsh.model.addPhysicalGroup(dim, cells, 1)
+    outer = gmsh.model.getBoundary([(dim, c) for c in cells], combined=True, oriented=False)
+    gmsh.model.addPhysicalGroup(dim - 1, [t for (_, t) in outer], BOUNDARY_TAG)
+    return {t for (_, t) in gmsh.model.getBoundary(outer, combined=False, oriented=False)}
+
+
+def _tag_fracture(gmsh, dim: int, i: int, ents: list, on_outer: set) -> None:
+    """Physical groups of fracture ``i``: its facets (``FRACTURE_TAG0 + i``) and
+    its tip (``TIP_TAG0 + i``), the part of its rim inside the domain."""
+    gmsh.model.addPhysicalGroup(dim - 1, ents, FRACTURE_TAG0 + i)
+    rim = gmsh.model.getBoundary([(dim - 1, e) for e in ents], combined=True, oriented=False)
+    tip = [t for (_, t) in rim if t not in on_outer]
+    if tip:
+        gmsh.model.addPhysicalGroup(dim - 2, tip, TIP_TAG0 + i)
+
+
+def _background_size(gmsh, fields: list) -> None:
+    """The smallest of the size ``fields`` sets the mesh size everywhere (sizes
+    from points and boundaries off)."""
+    mf = gmsh.model.mesh.field
     mn = mf.add("Min")
     mf.setNumbers(mn, "FieldsList", fields)
     mf.setAsBackgroundMesh(mn)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-    return _write(gmsh, 3, path)
 
 
 def _drop_outside(gmsh, dim: int, mapping: list) -> list:
@@ -298,11 +295,13 @@ def _drop_outside(gmsh, dim: int, mapping: list) -> list:
     return out
 
 
-def _threshold(mf, kind: str, ents, size_min: float, size_max: float, distance: float) -> int:
-    """A size field growing linearly from ``size_min`` on the entities to ``size_max``."""
+def _threshold(mf, kind: str, ents, size_min: float, size_max: float, distance: float,
+               sampling: int = 100) -> int:
+    """A size field growing linearly from ``size_min`` on the entities to
+    ``size_max`` at ``distance`` (distances sampled at ``sampling`` points per curve or surface)."""
     dist = mf.add("Distance")
     mf.setNumbers(dist, kind, ents)
-    mf.setNumber(dist, "Sampling", 100)
+    mf.setNumber(dist, "Sampling", sampling)
     thr = mf.add("Threshold")
     mf.setNumber(thr, "InField", dist)
     mf.setNumber(thr, "SizeMin", size_min)

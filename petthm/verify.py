@@ -5,40 +5,47 @@ import numpy as np
 from petsc4py import PETSc
 
 
-def jacobian_fd_error(problem, t: float = 0.0, shift: float = 1.0, eps: float = 1e-6,
-                      seed: int = 0) -> float:
-    """Relative error ||J d - (F(x+eps d) - F(x-eps d))/(2 eps)|| / ||J d||.
-
-    F(t, X, Xdot) is evaluated along X(s) = X + s d, Xdot(s) = Xdot + shift s d,
-    so J = dF/dX + shift dF/dXdot is the backward-Euler Jacobian.  X is the
-    problem's current state plus a random perturbation (so that nonlinear
-    terms are exercised away from special points); d is random.
-    """
+def _perturbed_state(problem, t: float, shift: float, rng):
+    """X (the problem's current state plus a random perturbation, so that
+    nonlinear terms are exercised away from special points), a random Xdot,
+    and the backward-Euler Jacobian J = dF/dX + shift dF/dXdot there."""
     X = problem.X.duplicate()
     problem.X.copy(X)
-    rng = np.random.default_rng(seed + problem.dm.comm.rank)
     X.getArray()[:] += 0.1 * rng.standard_normal(X.getLocalSize())
-    d = X.duplicate()
-    d.getArray()[:] = rng.standard_normal(d.getLocalSize())
     Xdot = X.duplicate()
     Xdot.getArray()[:] = rng.standard_normal(X.getLocalSize())
     J = problem.create_matrix()
     problem.ijacobian(None, t, X, Xdot, shift, J, J)
+    return X, Xdot, J
+
+
+def _central_difference(problem, t: float, shift: float, X, Xdot, d, eps: float):
+    """(F(X + eps d) - F(X - eps d)) / (2 eps) as a local array, with F
+    evaluated along X(s) = X + s d, Xdot(s) = Xdot + shift s d."""
+    F = []
+    for s in (eps, -eps):
+        Xs, Xds, Fs = X.duplicate(), Xdot.duplicate(), X.duplicate()
+        Xs.waxpy(s, d, X)
+        Xds.waxpy(shift * s, d, Xdot)
+        problem.ifunction(None, t, Xs, Xds, Fs)
+        F.append(Fs.getArray().copy())
+    return (F[0] - F[1]) / (2 * eps)
+
+
+def jacobian_fd_error(problem, t: float = 0.0, shift: float = 1.0, eps: float = 1e-6,
+                      seed: int = 0) -> float:
+    """Relative error ||J d - (F(x+eps d) - F(x-eps d))/(2 eps)|| / ||J d||
+    at a perturbed state (``_perturbed_state``) along a random direction d."""
+    rng = np.random.default_rng(seed + problem.dm.comm.rank)
+    X, Xdot, J = _perturbed_state(problem, t, shift, rng)
+    d = X.duplicate()
+    d.getArray()[:] = rng.standard_normal(d.getLocalSize())
     Jd = X.duplicate()
     J.mult(d, Jd)
-    Fp, Fm = X.duplicate(), X.duplicate()
-    Xp, Xm = X.duplicate(), X.duplicate()
-    Xp.waxpy(eps, d, X)
-    Xm.waxpy(-eps, d, X)
-    Xdp, Xdm = Xdot.duplicate(), Xdot.duplicate()
-    Xdp.waxpy(shift * eps, d, Xdot)
-    Xdm.waxpy(-shift * eps, d, Xdot)
-    problem.ifunction(None, t, Xp, Xdp, Fp)
-    problem.ifunction(None, t, Xm, Xdm, Fm)
-    fd = Fp - Fm
-    fd.scale(1.0 / (2 * eps))
-    diff = fd - Jd
-    return diff.norm() / max(Jd.norm(), 1e-300)
+    fd = _central_difference(problem, t, shift, X, Xdot, d, eps)
+    comm = problem.dm.comm.tompi4py()
+    num = comm.allreduce(float(np.sum((fd - Jd.getArray()) ** 2)))
+    return np.sqrt(num) / max(Jd.norm(), 1e-300)
 
 
 def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps=1e-6,
@@ -60,17 +67,12 @@ def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps=1e
             for k, v in jacobian_fd_block_errors(problem, t, shift, e, seed).items():
                 out[k] = min(v, out.get(k, np.inf))
         return out
-    X = problem.X.duplicate()
-    problem.X.copy(X)
     rng = np.random.default_rng(seed + problem.dm.comm.rank)
-    X.getArray()[:] += 0.1 * rng.standard_normal(X.getLocalSize())
-    Xdot = X.duplicate()
-    Xdot.getArray()[:] = rng.standard_normal(X.getLocalSize())
-    J = problem.create_matrix()
-    problem.ijacobian(None, t, X, Xdot, shift, J, J)
+    X, Xdot, J = _perturbed_state(problem, t, shift, rng)
     names, isets, _ = problem.dm.createFieldDecomposition()
     lo = X.getOwnershipRange()[0]
     rows = {n: iset.getIndices() - lo for n, iset in zip(names, isets)}
+    comm = problem.dm.comm.tompi4py()
     out = {}
     for trial in names:
         d = X.duplicate()
@@ -78,16 +80,8 @@ def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps=1e
         d.getArray()[rows[trial]] = rng.standard_normal(len(rows[trial]))
         Jd = X.duplicate()
         J.mult(d, Jd)
-        F = []
-        for s in (eps, -eps):
-            Xs, Xds, Fs = X.duplicate(), Xdot.duplicate(), X.duplicate()
-            Xs.waxpy(s, d, X)
-            Xds.waxpy(shift * s, d, Xdot)
-            problem.ifunction(None, t, Xs, Xds, Fs)
-            F.append(Fs.getArray().copy())
-        fd = (F[0] - F[1]) / (2 * eps)
+        fd = _central_difference(problem, t, shift, X, Xdot, d, eps)
         jd = Jd.getArray()
-        comm = problem.dm.comm.tompi4py()
         for test in names:
             r = rows[test]
             num = comm.allreduce(float(np.sum((fd[r] - jd[r]) ** 2)))

@@ -24,14 +24,10 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import os
-import subprocess
-import sys
 
 import numpy as np
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from study_tables import ROOT, read_history, run_petthm, write_csv
 
 SNEDDON = {2: ["-thm_sneddon_dim", "2", "-thm_sneddon_radius", "50"], 3: []}
 SNEDDON_SIZES = {2: [0.1, 0.05, 0.025, 0.0125], 3: [0.2, 0.1, 0.05]}
@@ -42,24 +38,13 @@ VI_SOLVERS = {"direct": [], "fieldsplit": ["-options_file", os.path.join(ROOT, "
                                                                          "fieldsplit_contact.opts")]}
 
 
-def petthm(scene, out, *opts):
-    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out, "-thm_quiet", *map(str, opts)]
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
-    if p.returncode:
-        print(p.stdout, p.stderr, file=sys.stderr)
-        raise SystemExit(f"{' '.join(cmd)} failed")
-    hist = list(csv.DictReader(open(os.path.join(out, "history.csv"))))
-    return json.load(open(os.path.join(out, "summary.json"))), hist
-
-
 def sneddon_study(out):
     rows = []
     for dim in (2, 3):
         for degree in (1, 2):
             for h in SNEDDON_SIZES[dim]:
                 d = os.path.join(out, "runs", f"sneddon{dim}d_P{degree}_h{h}")
-                s, _ = petthm("sneddon", d, *SNEDDON[dim], "-thm_fe_degree", degree, "-thm_sneddon_crack_size", h)
+                s = run_petthm("sneddon", d, *SNEDDON[dim], "-thm_fe_degree", degree, "-thm_sneddon_crack_size", h)
                 e = s["error"]
                 rows.append({"dim": dim, "degree": degree, "crack_size_over_R": h, "cells": s["cells"],
                              "dofs": sum(s["dofs"].values()), "wall_s": round(s["wall_time"]["total"], 2),
@@ -75,7 +60,7 @@ def mandel_study(out):
     for degree in (1, 2):
         for h in MANDEL_SIZES:
             d = os.path.join(out, "runs", f"mandel_P{degree}_h{h}")
-            s, _ = petthm("mandel", d, "-thm_fe_degree", degree, "-thm_mesh_size", h)
+            s = run_petthm("mandel", d, "-thm_fe_degree", degree, "-thm_mesh_size", h)
             e = s["error"]
             rows.append({"degree": degree, "mesh_size": h, "cells": s["cells"], "dofs": sum(s["dofs"].values()),
                          "steps": s["steps"], "wall_s": round(s["wall_time"]["total"], 2),
@@ -124,9 +109,9 @@ def vi_study(out):
 def _vi_run(out, solver, sopts, h, method, profiles):
     """One partial_opening run; its row of the table (and its opening profile)."""
     d = os.path.join(out, "runs", f"partial_{solver}_{method}_h{h}")
-    s, hist = petthm("partial_opening", d, "-thm_partial_crack_size", h, "-snes_type", method, *sopts)
-    its = [int(r["snes_its"]) for r in hist[1:]]
-    kits = [int(r["ksp_its"]) for r in hist[1:]]
+    s = run_petthm("partial_opening", d, "-thm_partial_crack_size", h, "-snes_type", method, *sopts)
+    hist = read_history(d)
+    its, kits = hist["snes_its"].astype(int).tolist(), hist["ksp_its"].astype(int).tolist()
     profiles[(solver, method, h)] = s["profile"]
     print(f"partial_opening {solver} {method} h={h}: Newton {its}, Krylov {kits}, "
           f"open to {s['open_length']:.3f} m", flush=True)
@@ -136,14 +121,6 @@ def _vi_run(out, solver, sopts, h, method, profiles):
             "krylov_total": sum(kits), "wall_s": round(s["wall_time"]["total"], 2),
             "open_length_m": s["open_length"], "opening_centre_mm": 1e3 * s["opening_centre"],
             "nodes_open": s["nodes_open"]}
-
-
-def write_csv(path, rows):
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
 
 
 def read_csv(path):

@@ -9,16 +9,10 @@ Reads only the runs' summary.json / history.csv; writes exchange.csv and exchang
 from __future__ import annotations
 
 import argparse
-import csv
-import json
 import os
-import subprocess
-import sys
 
 import numpy as np
-from study_tables import markdown, write_csv, write_markdown
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from study_tables import ROOT, markdown, read_history, run_petthm, write_csv, write_markdown
 
 
 def main():
@@ -31,15 +25,9 @@ def main():
     hist, summ = {}, {}
     for m in modes:
         d = os.path.join(a.out, f"runs/{m}")
-        cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", d, "-thm_quiet",
-               "-thm_fracture_heat_exchange", m, *a.extra]
-        p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-        if p.returncode:
-            sys.exit(p.stdout + p.stderr)
-        rows = list(csv.DictReader(open(os.path.join(d, "history.csv"))))[1:]
-        hist[m] = (np.array([float(r["time"]) for r in rows]),
-                   np.array([float(r["production_temperature"]) for r in rows]))
-        summ[m] = json.load(open(os.path.join(d, "summary.json")))
+        summ[m] = run_petthm("lauwerier", d, "-thm_fracture_heat_exchange", m, *a.extra)
+        h = read_history(d)
+        hist[m] = (h["time"], h["production_temperature"])
     t0, T0 = hist["equilibrium"]
     out = []
     for m in modes:

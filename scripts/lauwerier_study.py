@@ -18,13 +18,11 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import os
-import subprocess
-import sys
 from concurrent.futures import ThreadPoolExecutor
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from study_tables import ROOT, run_petthm, write_csv
+
 DT_RANGE = 80.0           # T0 - Tinj of the default scene (K)
 
 #: level -> (fracture mesh size m, far mesh size m, dt growth, dt_max s)
@@ -35,19 +33,12 @@ LEVELS = {0: (4.0, 20.0, 1.10, 4e6), 1: (2.0, 15.0, 1.07, 2e6), 2: (1.0, 10.0, 1
 def run_one(out, degree, level, scheme="beuler"):
     fs, ms, g, dtmax = LEVELS[level]
     d = os.path.join(out, f"P{degree}_L{level}" + ("" if scheme == "beuler" else f"_{scheme}"))
-    cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", d, "-thm_quiet",
-           "-thm_fe_degree", str(degree), "-thm_lauwerier_fracture_size", str(fs), "-thm_mesh_size", str(ms),
-           "-thm_dt_growth", str(g), "-thm_dt_max", str(dtmax)]
-    if scheme == "bdf2":
-        cmd += ["-ts_type", "bdf", "-ts_bdf_order", "2"]
+    dt = ("-thm_dt_growth", g, "-thm_dt_max", dtmax)
     if scheme == "beuler_fine_dt":       # the same small steps at every level: spatial error only
-        cmd[-4:] = ["-thm_dt_growth", "1.01", "-thm_dt_max", "1e5"]
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")   # one core per run
-    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
-    if p.returncode:
-        print(p.stdout, p.stderr, file=sys.stderr)
-        raise SystemExit(f"run P{degree} level {level} failed")
-    s = json.load(open(os.path.join(d, "summary.json")))
+        dt = ("-thm_dt_growth", 1.01, "-thm_dt_max", 1e5)
+    bdf2 = ("-ts_type", "bdf", "-ts_bdf_order", 2) if scheme == "bdf2" else ()
+    s = run_petthm("lauwerier", d, "-thm_fe_degree", degree, "-thm_lauwerier_fracture_size", fs,
+                   "-thm_mesh_size", ms, *dt, *bdf2)
     e = s["error"]
     row = {"scheme": scheme, "degree": degree, "level": level, "fracture_size": fs, "mesh_size": ms, "dt_growth": g,
            "dt_max": dtmax, "cells": s["cells"], "dofs": sum(s["dofs"].values()), "steps": s["steps"],
@@ -118,10 +109,7 @@ def main():
             done = {(r["scheme"], int(r["degree"]), int(r["level"])) for r in rows}
             rows += [r for r in csv.DictReader(open(path))
                      if (r.get("scheme", "beuler"), int(r["degree"]), int(r["level"])) not in done]
-        with open(path, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows({**r, "scheme": r.get("scheme") or "beuler"} for r in rows)
+        write_csv(path, [{**r, "scheme": r.get("scheme") or "beuler"} for r in rows])
     rows = list(csv.DictReader(open(path)))
     plot(rows, a.out)
     md = table(rows)

@@ -15,36 +15,20 @@ leakoff fraction, balances, wall time).  Extra options after ``--`` go to every 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
-import subprocess
-import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from study_tables import markdown, write_csv, write_markdown
+from study_tables import ROOT, markdown, read_history, read_summary, run_petthm, write_csv, write_markdown
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CASES = [("k0", "0"), ("1d_1e-16", "0,1e-16"), ("1d_1e-15", "0,1e-15"), ("1d_1e-14", "0,1e-14"),
          ("1d_1e-13", "0,1e-13"), ("1d_1e-12", "0,1e-12"), ("2d_1e-13", "1e-13")]
 
 
 def run(out, name, perm, extra):
-    d = os.path.join(out, "runs", name)
-    cmd = [sys.executable, "-m", "petthm", "rigid_fracture", "-thm_output_dir", d, "-thm_quiet",
-           "-thm_rock_permeability", perm, *extra]
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
-    if p.returncode:
-        print(p.stdout, p.stderr, file=sys.stderr)
-        raise SystemExit(f"run {name} failed")
+    run_petthm("rigid_fracture", os.path.join(out, "runs", name), "-thm_rock_permeability", perm, *extra)
     print(f"{name}: done", flush=True)
-
-
-def history(d):
-    rows = list(csv.DictReader(open(os.path.join(d, "history.csv"))))
-    return {k: np.array([float(r[k]) for r in rows[1:]]) for k in rows[0] if k}
 
 
 def at(h, t, key):
@@ -76,7 +60,7 @@ def plots(out):
         d = os.path.join(out, "runs", name)
         if not os.path.exists(os.path.join(d, "summary.json")):
             continue
-        h, s = history(d), json.load(open(os.path.join(d, "summary.json")))
+        h, s = read_history(d), read_summary(d)
         label = "k = 0" if name == "k0" else ("1D " if name.startswith("1d") else "2D ") + name.split("_")[1] + " m2"
         ax.semilogx(h["time"], h["production_temperature"], label=label)
         prof = os.path.join(d, "profile_1e8.json")

@@ -15,17 +15,12 @@ peak, the a(lam) identity, balances, wall time)."""
 from __future__ import annotations
 
 import argparse
-import csv
-import json
 import os
-import subprocess
-import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from study_tables import markdown, write_csv, write_markdown
+from study_tables import ROOT, markdown, read_history, read_summary, run_petthm, write_csv, write_markdown
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OPTS = os.path.join(ROOT, "options", "scenes", "penny_impermeable.opts")
 DEFAULT = "h10"
 CASES = {
@@ -42,24 +37,12 @@ PAPER = {"lam_injector": 30e6, "aperture_injector": 0.3e-3}
 
 
 def run(out, name, extra):
-    d = os.path.join(out, "runs", name)
-    cmd = [sys.executable, "-m", "petthm", "penny_impermeable", "-options_file", OPTS, "-thm_output_dir", d,
-           "-thm_quiet", *CASES[name][1], *extra]
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
-    if p.returncode:
-        print(p.stdout, p.stderr, file=sys.stderr)
-        raise SystemExit(f"run {name} failed")
+    run_petthm("penny_impermeable", os.path.join(out, "runs", name), "-options_file", OPTS, *CASES[name][1], *extra)
     print(f"{name}: done", flush=True)
 
 
-def history(d):
-    rows = list(csv.DictReader(open(os.path.join(d, "history.csv"))))
-    return {k: np.array([float(r[k]) for r in rows[1:]]) for k in rows[0] if k}
-
-
 def row(name, d):
-    h, s = history(d), json.load(open(os.path.join(d, "summary.json")))
+    h, s = read_history(d), read_summary(d)
     k = int(np.argmax(h["injection_pressure"]))
     p = h["injection_pressure"]
     return {"case": name, "what": CASES[name][0], "cells": s["cells"],
@@ -85,7 +68,7 @@ def fig6(out, names):
     import matplotlib.pyplot as plt
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
     for name in names:
-        h = history(os.path.join(out, "runs", name))
+        h = read_history(os.path.join(out, "runs", name))
         lw = 2.0 if name == DEFAULT else 1.0
         ax1.semilogx(h["time"], h["injection_pressure"] / 1e6, lw=lw, label=f"{name}: {CASES[name][0]}")
         ax2.semilogx(h["time"], h["aperture_injector"] * 1e3, lw=lw, label=name)

@@ -1,11 +1,47 @@
-"""Shared output of the study scripts: a CSV of result rows and a markdown
-table of selected, formatted columns."""
+"""Shared helpers of the study scripts: run one ``python -m petthm`` case,
+read back its history and summary, and write a CSV of result rows and a
+markdown table of selected, formatted columns."""
 from __future__ import annotations
 
 import csv
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def run_petthm(scene: str, out_dir: str, *opts) -> dict:
+    """Run ``python -m petthm SCENE -thm_output_dir OUT_DIR -thm_quiet OPTS``
+    from the repository root on one core (one BLAS/OpenMP thread, so that
+    studies may run cases side by side) and return its summary.json.  A failed
+    run prints its output and stops the study."""
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out_dir, "-thm_quiet", *map(str, opts)]
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
+    if p.returncode:
+        print(p.stdout, p.stderr, file=sys.stderr)
+        raise SystemExit(f"{' '.join(cmd)} failed")
+    return read_summary(out_dir)
+
+
+def read_summary(out_dir: str) -> dict:
+    with open(os.path.join(out_dir, "summary.json")) as f:
+        return json.load(f)
+
+
+def read_history(out_dir: str) -> dict[str, np.ndarray]:
+    """The run's history.csv as float columns, without the initial-state row."""
+    with open(os.path.join(out_dir, "history.csv")) as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows[1:]]) for k in rows[0] if k}
 
 
 def write_csv(path: str, rows: list[dict]) -> None:
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
