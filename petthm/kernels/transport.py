@@ -31,8 +31,17 @@ enthalpy brought in by wells and boundaries (physics.md section 7).  It
 differs from the advective form of section 7 by T (S pdot - B Tdot), the
 fluid's storage rate times T, which vanishes for an incompressible fluid.
 SUPG (Brooks & Hughes 1982) uses the residual of the advective form,
-R = C Tdot + b . grad T - L lap T (+ the wall exchange on the fracture),
-tau = ((2|b|/h_p)^2 + 9 (4 L/h_p^2)^2)^(-1/2), h_p = h/p.  With w = 1 the
+R = C Tdot + b . grad T - L lap T,
+tau = ((2|b|/h_p)^2 + 9 (4 L/h_p^2)^2)^(-1/2), h_p = h/p.  The fracture's
+wall exchange hw (T - Tm) is left out of R: it is a coupling to the rock,
+and where it dominates (hw = Nu lambda_f / (2a) is about 1e4 W/m2/K, the
+Damkoehler number hw h / |b| is 1e2-1e3) its SUPG term
+tau (b . grad w) hw (T - Tm) has off-diagonal entries of the size of the
+exchange itself and no sign, and Tf left [Tinj, T0] by 12-19 % in Scene 2.
+Without it the scheme is streamline upwinding of the advection-conduction
+operator with the (lumped) exchange as a source: Tf stays in the bounds,
+at the price of consistency O(tau hw (T - Tm)) in the exchange layer,
+which no mesh resolves there (its thickness rho_f C_f q / hw is a few mm).  With w = 1 the
 SUPG term vanishes, so it does not disturb the balance.  Every Jacobian
 block is exact (tests/test_fracture_physics.py checks them against finite
 differences).
@@ -78,7 +87,6 @@ class Heat:
     flow: Optional[Flow] = None     # the flow that advects heat
     degree: int = 2
     supg: bool = True
-    exchange: tuple = ()            # (hw, trace name) pairs: R += hw (T - T_trace) (fracture)
     aperture: Optional[object] = None
     lumped: bool = False            # capacity term by row-sum lumping (P1, no aperture)
 
@@ -234,8 +242,6 @@ class _HeatPoint:
             if h.degree > 1:
                 self.lapT = ctx.lap(T)[..., 0]
                 R = R - self.L * self.lapT
-            for hw, trace in h.exchange:
-                R = R + _hw(hw, ctx) * (self.Tv - ctx.value(trace)[..., 0])
             self.R = R
         self.d = d
 
@@ -291,8 +297,7 @@ def heat_g2_TT(h: Heat, ctx):
     b, m = hp.b, hp.m[..., None]
     g = -b * (1.0 + hp.Tv[..., None] * m)                   # d(-b T)/dT
     if h.supg:
-        extra = hp.C * ctx.shift + sum(_hw(hw, ctx) for hw, _ in h.exchange)
-        g = g + (hp.tau * extra)[..., None] * b
+        g = g + (hp.tau * hp.C * ctx.shift)[..., None] * b
         g = g + np.einsum("nqac,nqc->nqa", hp.dZ_db(), b * m)
     return g[:, :, None, :, None]
 
@@ -326,12 +331,6 @@ def heat_g3_Tp(h: Heat, ctx):
     return np.einsum("nqac,nqce->nqae", D, dbdg)[:, :, None, :, None, :]
 
 
-def heat_g2_exchange(h: Heat, hw, ctx):
-    """SUPG part of d f1/d T_trace: -tau hw b."""
-    hp = _HeatPoint(h, ctx)
-    return ((-_hw(hw, ctx) * hp.tau)[..., None] * hp.b)[:, :, None, :, None]
-
-
 def heat_s0_aperture(h: Heat, ctx):
     """d f0/d a (with da/dt): capacity (Tdot + T shift)."""
     return h.capacity * (ctx.dot(h.T)[..., 0] + ctx.value(h.T)[..., 0] * ctx.shift)
@@ -351,9 +350,6 @@ def heat_s1_aperture(h: Heat, ctx):
             dR = h.capacity * ctx.dot(h.T)[..., 0] + np.einsum("cqa,cqa->cq", db, hp.gT)
             if h.degree > 1:
                 dR = dR - h.conductivity * hp.lapT
-            for hw, trace in h.exchange:
-                if isinstance(hw, ApertureExchange):
-                    dR = dR + hw.derivative(ctx) * (hp.Tv - ctx.value(trace)[..., 0])
             dtau = -hp.tau ** 3 * (hp.A * np.einsum("cqa,cqa->cq", hp.b, db) + hp.B1 * hp.L * h.conductivity)
             s = s + (dtau * hp.R + hp.tau * dR)[..., None] * hp.b + (hp.tau * hp.R)[..., None] * db
     return s
@@ -382,9 +378,6 @@ def heat_terms(h: Heat) -> tuple[list, list]:
                         region=h.region)]
     if advect:
         jac.append(CellJacobian(h.T, h.flow.p, g3=partial(heat_g3_Tp, hh), region=h.region))
-        if supg:
-            for hw, trace in h.exchange:
-                jac.append(CellJacobian(h.T, trace, g2=partial(heat_g2_exchange, hh, hw), region=h.region))
     if h.aperture is not None:
         jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), partial(heat_s1_aperture, hh))
     return res, jac

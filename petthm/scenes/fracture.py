@@ -156,18 +156,16 @@ class FractureScene(Scene):
             if hw is not None and aperture is not None and self[HeatExchange].fracture_heat_exchange.strip().lower() \
                     == "nusselt":
                 hw = tr.ApertureExchange(NUSSELT * m.fluid_conductivity / 2, aperture)   # hw = Nu lambda_f / (2 a)
-            exchange = ()
             if hw is None:
                 ties["Tm"] = "Tf"
             else:
                 if permeability is not None:
                     raise InputError("option -thm_fracture_heat_exchange: only 'equilibrium' is implemented "
                                      "with a permeable matrix (the heat carried by leakoff needs the wall flux)")
-                exchange = tuple((hw, s) for s in ("Tm-", "Tm+"))
                 r, j = tr.exchange_terms("Tf", ("Tm-", "Tm+"), hw, lumped=lumped)
                 res, jac = res + r, jac + j
             frac_heat = tr.Heat("fracture", "Tf", unit * m.fluid_rho_c, unit * m.fluid_conductivity, m.fluid_rho_c,
-                                frac_flow, degree, True, exchange, aperture)
+                                frac_flow, degree, True, aperture=aperture)
             r, j = tr.heat_terms(frac_heat)
             res, jac = res + r, jac + j
             lam = m.conductivity if rock_conductivity is None else rock_conductivity
