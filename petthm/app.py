@@ -46,6 +46,17 @@ def check_unused_petsc_options() -> None:
                          "(misspelt, or not valid for this scene)")
 
 
+def drop_unused_proposals() -> None:
+    """Remove the solver options petthm proposed that no solver read (e.g.
+    the direct-solver defaults when a recipe picks another preconditioner),
+    so that PETSc's report of unused options at exit names only the user's."""
+    from .solver import PROPOSED
+    opts = PETSc.Options()
+    for o in compat.unused_options():
+        if o in PROPOSED:
+            opts.delValue(o)
+
+
 def make_scene(name: str):
     from .scenes import load_all
     load_all()
@@ -189,6 +200,7 @@ class Run:
         state["wall"] = time.perf_counter()
         reason = stepper.solve()
         self._pop("solve", st, t0)
+        drop_unused_proposals()
         t_final = stepper.ts.getTime()
         status = "completed" if reason > 0 else "failed"
         summary = {
