@@ -11,6 +11,8 @@ options database has no value for the key.
 from __future__ import annotations
 
 import math
+import sys
+import traceback
 from dataclasses import dataclass
 from typing import Callable
 
@@ -571,12 +573,18 @@ class TimeStepper:
 
     def _monitor(self, ts, step, t, X):
         """Call the user's monitor; an exception stops the run cleanly and is
-        re-raised by ``solve`` (exceptions must not cross the C callback)."""
+        re-raised by ``solve`` (exceptions must not cross the C callback).
+        In parallel a failure on some ranks only would leave the others
+        waiting in the next step's collectives (and they may be inside the
+        monitor's own), so the failing rank prints its traceback and aborts
+        the whole run."""
         if self._user_monitor is None or self.error is not None:
             return
         try:
             self._user_monitor(step, t, X)
         except Exception as e:  # noqa: BLE001 - re-raised after TSSolve returns
+            if ts.comm.size > 1:
+                _abort_all(ts.comm, f"rank {ts.comm.rank}: the step monitor failed at step {step}, t = {t:.6g} s")
             self.error = e
             ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_USER)
 
@@ -590,6 +598,14 @@ class TimeStepper:
 
     def iterations(self) -> tuple[int, int]:
         return self.ts.getSNESIterations(), self.ts.getKSPIterations()
+
+
+def _abort_all(comm, message: str) -> None:
+    """Print the current exception's traceback with ``message`` and abort every rank."""
+    traceback.print_exc()
+    print(f"petthm: {message}; aborting all ranks", file=sys.stderr)
+    sys.stderr.flush()
+    comm.tompi4py().Abort(1)
 
 
 class VIFieldSplit:

@@ -115,3 +115,25 @@ def test_scene2_parallel_matches_serial(tmp_path):
     field = np.abs(v2 - v1).max() / np.abs(v1).max()
     print(f"penny_impermeable: 2 ranks vs serial: histories {worst:.1e}, final Tm {field:.1e}")
     assert worst <= 1e-8 and field <= 1e-8
+
+
+@pytest.mark.parallel
+def test_monitor_failure_on_one_rank_stops_every_rank(tmp_path):
+    """A scene monitor that raises on rank 1 only (tests/fault_monitor.py):
+    the run stops with the traceback and a non-zero exit instead of leaving
+    rank 0 waiting in the next step's collectives (it hung before).  Serially,
+    the same failure stops the run with the traceback too."""
+    import os
+    import subprocess
+    import sys
+    from conftest import MPI_ENV, ROOT
+    script = os.path.join(ROOT, "tests", "fault_monitor.py")
+    env = dict(os.environ, **MPI_ENV, PYTHONPATH=os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")]))
+    for ranks, rank in ((1, 0), (2, 1)):
+        cmd = [sys.executable, script, str(rank), str(tmp_path / f"n{ranks}")]
+        if ranks > 1:
+            cmd = ["mpiexec", "-n", str(ranks)] + cmd
+        proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+        print(ranks, proc.returncode, proc.stderr[-400:])
+        assert proc.returncode != 0
+        assert f"injected monitor failure on rank {rank}" in proc.stderr
