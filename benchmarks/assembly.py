@@ -117,7 +117,8 @@ def bench(path, model, repeat):
     name = model.fields[0].name
     asm = Assembler(disc, model, {name: FieldScale()})
     t0 = time.perf_counter()
-    A = asm.create_matrix()
+    A = dm.createMat()
+    compat.coo_preallocate(A, asm.coo_rows, asm.coo_cols)
     t_prealloc = time.perf_counter() - t0
     rng = np.random.default_rng(0)
     xl = rng.standard_normal(disc.nlocal)

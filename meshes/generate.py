@@ -14,7 +14,7 @@ fracture i is the physical group 10 + i of facets, the domain group 1):
   two_rectangles  100 m cube, two parallel rectangles
   penny_wells     400 m cube, horizontal disc R = 100 m with wells at (+-50, 0) from its centre
 
-``python -m petthm.fracture OUT.msh`` prints the cohesive split's statistics.
+``python scripts/split_report.py OUT.msh`` prints the cohesive split's statistics.
 """
 import sys
 

@@ -18,7 +18,7 @@ def _scene_help(name):
     load_all()
     cls = REGISTRY[name]
     lines = [f"{name}: {cls.description}", "", "parameters (-option  default  unit  meaning):",
-             P.help_text((P.RunParams,) + tuple(cls.parameter_sets)), "",
+             P.help_text((P.RunParams,) + tuple(cls.parameters)), "",
              f"time defaults: final {cls.time.final_time:g} s, first step {cls.time.dt_initial:g} s, "
              f"growth {cls.time.dt_growth:g}, largest step {cls.time.dt_max:g} s",
              "solver: any PETSc option (-ts_*, -snes_*, -ksp_*, -pc_*, -fieldsplit_*), "

@@ -4,10 +4,24 @@
 Abate & Valko 2004), vectorised over the contour nodes.
 ``leakoff_outlet_temperature``: verification.md section 2, fracture heat
 transport with a uniform leakoff fraction m (matrix advection on or off).
+``lauwerier_temperature``: verification.md section 1.
 """
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import erfc
+
+
+def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T0, Ti):
+    """Lauwerier (1955) fracture temperature (verification.md section 1):
+    T0 + (Ti - T0) erfc(lambda x / (rho_f c_f q sqrt(kappa (t - t_d)))) U(t - t_d),
+    t_d = a x / q, kappa = lambda / (rho C); q per metre of fracture height."""
+    x = np.asarray(x, dtype=float)
+    kappa = conductivity / rho_c
+    td = aperture * x / q
+    tt = np.maximum(t - td, 1e-300)
+    arg = conductivity * x / (fluid_rho_c * q * np.sqrt(kappa * tt))
+    return np.where(t > td, T0 + (Ti - T0) * erfc(arg), T0)
 
 
 def talbot(F, t: float, M: int = 32) -> float:

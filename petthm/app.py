@@ -3,7 +3,12 @@
 Each phase is a PETSc log stage (``-log_view`` shows mesh, setup, solve,
 output; the residual and Jacobian assembly are the events ``thm.residual``
 and ``thm.jacobian``).  Rank 0 prints one progress line per step and writes
-``summary.json``, ``history.csv`` and the XDMF/HDF5 fields.
+``summary.json`` (with the provenance: every parameter and PETSc option in
+effect and the petthm git commit), ``history.csv`` and the XDMF/HDF5 fields.
+
+A mesh with fracture physical groups (``meshing.FRACTURE_TAG0`` and up) is
+split along them (cohesive cells); a scene whose model has fracture fields
+needs such a mesh, and one without fracture physics refuses it.
 """
 from __future__ import annotations
 
@@ -14,12 +19,15 @@ import time
 from petsc4py import PETSc
 
 from . import __version__, compat, params as P
+from .constraints import boundary_entries
 from .errors import InputError
 from .fields import Discretisation
 from .mesh import Mesh, distribute, label_boundaries, read_plex
+from .model import Domain
 from .output import FieldWriter, History, write_summary
+from .problem import Problem
 from .scenes.base import REGISTRY
-from .solver import Problem, StepControl, TimeStepper, propose_defaults, SOLVER_DEFAULTS
+from .solver import SOLVER_DEFAULTS, StepControl, TimeStepper, propose_defaults
 
 #: options PETSc reads only at finalize or start-up; never "unused"
 _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
@@ -28,7 +36,8 @@ _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "
 
 
 #: a solver recipe may set the split of a field the scene does not have
-_RECIPE_SPLITS = tuple(f"{pre}fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam", "rest") for pre in ("", "vi_"))
+_RECIPE_SPLITS = tuple(f"{pre}fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam",
+                                                         "rest") for pre in ("", "vi_"))
 
 
 def _say(comm, msg):
@@ -64,9 +73,29 @@ def make_scene(name: str):
         raise InputError(f"unknown scene '{name}'; scenes: {', '.join(sorted(REGISTRY))}")
     cls = REGISTRY[name]
     run = P.read(P.RunParams)
-    values = {c: P.read(c) for c in cls.parameter_sets}
-    P.check_unknown_thm_options((P.RunParams,) + tuple(cls.parameter_sets))
-    return cls(run, values)
+    P.check_unknown_thm_options((P.RunParams,) + tuple(cls.parameters))
+    return cls.read(run)
+
+
+def git_commit() -> str | None:
+    """The petthm source's git commit (+ "-dirty" with uncommitted changes), or None."""
+    import subprocess
+    here = os.path.dirname(os.path.abspath(__file__))
+    try:
+        rev = subprocess.run(["git", "-C", here, "rev-parse", "HEAD"], capture_output=True, text=True,
+                             timeout=10)
+        if rev.returncode:
+            return None
+        dirty = subprocess.run(["git", "-C", here, "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=10).stdout.strip()
+        return rev.stdout.strip() + ("-dirty" if dirty else "")
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+def options_in_effect() -> dict[str, str]:
+    """Every PETSc option in the database (the user's and petthm's proposals)."""
+    return {"-" + k: v for k, v in sorted(PETSc.Options().getAll().items())}
 
 
 class Run:
@@ -80,6 +109,8 @@ class Run:
         self.outdir = run.output_dir or os.path.join("output", scene.name)
         self.stage_wall = {}
         self.t_start = time.perf_counter()
+        self.mesh_path = run.mesh_file
+        self.problem: Problem | None = None
 
     # -- phases ----------------------------------------------------------------
     def _stage(self, name):
@@ -96,7 +127,7 @@ class Run:
         st, t0 = self._stage("mesh")
         if self.comm.rank == 0:
             os.makedirs(self.outdir, exist_ok=True)
-        path = run.mesh_file
+        path = self.mesh_path
         if not path:
             path = os.path.join(self.outdir, "mesh.msh")
             size = run.mesh_size or scene.time.mesh_size
@@ -105,32 +136,35 @@ class Run:
             self.mpi.barrier()
         dm = read_plex(path, self.comm)
         label_boundaries(dm, scene.boundaries())
-        if scene.fractured:
-            from .fracture import split_fractures
-            dm, self.split_info = split_fractures(dm)
-            if not self.split_info:
-                raise InputError(f"mesh '{path}' has no fracture (physical group 10, 11, ... of facets)")
-        dm = distribute(dm)
-        mesh = Mesh(dm)
-        if scene.fractured:
-            from .fracture import FractureSurface
-            mesh.fracture = FractureSurface(mesh)
+        from .fracture import split_fractures
+        dm, _ = split_fractures(dm)
+        mesh = Mesh(distribute(dm))
         self._pop("mesh", st, t0)
+        self.mesh_path = path
         return mesh
+
+    def _check_fractures(self, mesh: Mesh, model) -> None:
+        wants = any(f.region is Domain.FRACTURE for f in model.fields)
+        if wants and mesh.fracture is None:
+            raise InputError(f"mesh '{self.mesh_path}' has no fracture (physical group 10, 11, ... of "
+                             f"facets), which scene {self.scene.name} needs")
+        if not wants and mesh.fracture is not None:
+            raise InputError(f"mesh '{self.mesh_path}' has fractures (physical groups 10, 11, ...), "
+                             f"but scene {self.scene.name} has no fracture physics")
 
     def setup(self, mesh: Mesh):
         scene, run = self.scene, self.scene.run
         st, t0 = self._stage("setup")
-        model, dirichlet, scales, initial = scene.build(mesh, run.fe_degree)
-        bcs = {}
-        for d in dirichlet:
-            bcs.setdefault(d.field, []).append(d.entry())
-        regions = {"fracture": mesh.fracture} if scene.fractured else {}
-        disc = Discretisation(mesh, model.fields, bcs, regions=regions, ties=model.ties)
-        problem = Problem(disc, model, scales, dirichlet, run.quadrature_degree or None)
-        problem.set_initial(initial)
+        setup = scene.build(mesh, run.fe_degree)
+        model = setup.model
+        self._check_fractures(mesh, model)
+        regions = {Domain.FRACTURE: mesh.fracture} if mesh.fracture is not None else {}
+        disc = Discretisation(mesh, model.fields, boundary_entries(setup.dirichlet), regions=regions,
+                              ties=model.ties)
+        problem = Problem(disc, model, setup.scales, setup.dirichlet, run.quadrature_degree or None)
+        problem.set_initial(setup.initial)
         td = scene.time
-        control = StepControl(final_time=run.final_time or td.final_time,
+        control = StepControl(final_time=scene.final_time,
                               dt_initial=run.dt_initial or td.dt_initial,
                               growth=run.dt_growth or td.dt_growth,
                               dt_max=run.dt_max or td.dt_max,
@@ -138,13 +172,14 @@ class Run:
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
         propose_defaults(dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm)))
         self._pop("setup", st, t0)
-        return disc, problem, control, rs
+        self.problem = problem
+        return disc, problem, control, rs, setup.monitor
 
     def execute(self) -> dict:
         scene, run = self.scene, self.scene.run
         comm = self.comm
         mesh = self.build_mesh()
-        disc, problem, control, rscales = self.setup(mesh)
+        disc, problem, control, rscales, scene_monitor = self.setup(mesh)
         sizes = disc.global_sizes()
         _say(comm, f"petthm {__version__} | scene {scene.name} | {comm.size} rank(s) | "
              f"{mesh.global_cell_count()} cells | P{run.fe_degree} | dofs "
@@ -158,7 +193,7 @@ class Run:
         for f in disc.fields:
             groups.setdefault((f.region, f.degree), []).append(f)
         top = {r: max(d for rr, d in groups if rr == r) for r, _ in groups}
-        writers = [(FieldWriter(disc, self.outdir, d, ("fields" if r == "matrix" else "fracture")
+        writers = [(FieldWriter(disc, self.outdir, d, ("fields" if r is Domain.MATRIX else "fracture")
                                 + ("" if d == top[r] else f"_p{d}"), r), fields)
                    for (r, d), fields in groups.items()]
         columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(scene.history_columns)
@@ -182,7 +217,7 @@ class Run:
             state["last_t"] = t
             wall = time.perf_counter() - self.t_start
             row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk, "wall": wall}
-            row.update(scene.monitors(problem, t, X))
+            row.update(scene_monitor(problem, t, X))
             history.write(row)
             if step == 1:
                 check_unused_petsc_options()
@@ -215,17 +250,20 @@ class Run:
             "final_time": t_final,
         }
         st, t0 = self._stage("output")
-        summary.update(scene.report(problem, t_final))
+        summary.update(scene_monitor.report(problem, t_final))
+        summary["provenance"] = {"git_commit": git_commit(), "mesh": self.mesh_path,
+                                 "parameters": P.values_in_effect(run) | P.values_in_effect(scene.p),
+                                 "options": options_in_effect()}
         if status == "failed":
             write_fields(t_final)
         history.close()
+        stepper.destroy()
         self._pop("output", st, t0)
         summary["wall_time"] = dict(self.stage_wall, total=time.perf_counter() - self.t_start)
         write_summary(os.path.join(self.outdir, "summary.json"), summary, comm.rank)
         _say(comm, f"{status}: t = {t_final:.4e} s in {summary['steps']} steps "
              f"({summary['rejected_steps']} rejected), {summary['wall_time']['total']:.2f} s; "
              f"output in {self.outdir}")
-        self.problem = problem
         return summary
 
     @staticmethod

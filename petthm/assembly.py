@@ -25,11 +25,11 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from petsc4py import PETSc
 
 from . import compat, fe
-from .fields import Discretisation
-from .model import Model
+from .context import CellContext, FacetContext, physical_gradient
+from .fields import Discretisation, FieldRef
+from .model import MATRIX, Model, Region
 
 CHUNK = 16384
 
@@ -40,18 +40,6 @@ class FieldScale:
     scale: float = 1.0
     offset: float = 0.0
     rscale: float = 1.0
-
-
-def physical_gradient(G, Jinv):
-    """grad[c,q,m,a] = sum_k G[c,q,k,m] Jinv[c,k,a] for reference gradients G (nc,nq,d,m).
-
-    Written as d broadcast multiply-adds: numpy's batched matmul is slow for
-    millions of 3x3 products."""
-    d = Jinv.shape[1]
-    out = G[:, :, 0, :, None] * Jinv[:, None, None, 0, :]
-    for k in range(1, d):
-        out += G[:, :, k, :, None] * Jinv[:, None, None, k, :]
-    return out
 
 
 def reference_flux(f1, Jinv):
@@ -77,117 +65,6 @@ class _Tab:
         self.D = np.ascontiguousarray(t.dphi.transpose(0, 2, 1).reshape(nq * dim, nb))
 
 
-class CellContext:
-    """Fields at the quadrature points of a batch of cells (SI units).
-
-    ``value(f)`` (nc, nq, ncomp), ``grad(f)`` (nc, nq, ncomp, dim),
-    ``dot(f)`` time derivative values, ``lap(f)`` (nc, 1, ncomp) Laplacian
-    (constant per cell for P1/P2 on affine cells); ``x`` (nc, nq, dim)
-    physical points, ``h`` (nc, 1) cell size, ``t`` time, ``shift`` the
-    d(x_dot)/dx of the time integrator.
-    """
-
-    def __init__(self, asm: "Assembler", cells: slice, xl, xdl, t, shift=0.0):
-        self._asm, self._cells, self._xl, self._xdl = asm, cells, xl, xdl
-        self.t, self.shift = t, shift
-        m = asm.mesh
-        self.dim = m.dim
-        self.Jinv = m.Jinv[cells]
-        self.h = m.h[cells][:, None]
-        self._cache = {}
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """(number of cells, number of quadrature points) of this batch."""
-        return (self.Jinv.shape[0], self._asm.rule.weights.size)
-
-    @property
-    def x(self):
-        """Physical coordinates of the quadrature points (nc, nq, dim)."""
-        if "x" not in self._cache:
-            m = self._asm.mesh
-            self._cache["x"] = m.x0[self._cells][:, None, :] + \
-                np.einsum("cak,qk->cqa", m.J[self._cells], self._asm.rule.points)
-        return self._cache["x"]
-
-    def _nodal(self, name, dot=False):
-        key = ("n", name, dot)
-        if key not in self._cache:
-            a = self._asm
-            f = a.disc.field(name)
-            sc = a.scale(name)
-            src = self._xdl if dot else self._xl
-            v = src[a.dofs(name)[self._cells]] * sc.scale
-            if not dot:
-                v = v + sc.offset
-            self._cache[key] = v.reshape(v.shape[0], -1, f.ncomp)
-        return self._cache[key]
-
-    def value(self, name):
-        key = ("v", name)
-        if key not in self._cache:
-            self._cache[key] = self._asm.tab(name).phi @ self._nodal(name)
-        return self._cache[key]
-
-    def dot(self, name):
-        key = ("d", name)
-        if key not in self._cache:
-            self._cache[key] = self._asm.tab(name).phi @ self._nodal(name, dot=True)
-        return self._cache[key]
-
-    def grad(self, name):
-        key = ("g", name)
-        if key not in self._cache:
-            tab = self._asm.tab(name)
-            X = self._nodal(name)
-            nc, nq, r = X.shape[0], tab.phi.shape[0], self.Jinv.shape[1]
-            G = (tab.D @ X).reshape(nc, nq, r, -1)                   # (nc, nq, k, m)
-            self._cache[key] = physical_gradient(G, self.Jinv)
-        return self._cache[key]
-
-    def lap(self, name):
-        key = ("l", name)
-        if key not in self._cache:
-            lapb = self._asm.basis_laplacian(name, self._cells)         # (nc, nb)
-            self._cache[key] = np.einsum("ci,cim->cm", lapb, self._nodal(name))[:, None, :]
-        return self._cache[key]
-
-
-class FacetContext(CellContext):
-    """Fields at the quadrature points of boundary facets (same API) plus ``n``."""
-
-    def __init__(self, asm, fb: "_FacetBatch", xl, xdl, t, shift=0.0):
-        self._asm, self._cells, self._xl, self._xdl = asm, fb.cells, xl, xdl
-        self.t, self.shift = t, shift
-        m = asm.mesh
-        self.dim = m.dim
-        self.Jinv = m.Jinv[fb.cells]
-        self.h = m.h[fb.cells][:, None]
-        self._fb = fb
-        self._cache = {"x": m.x0[fb.cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[fb.cells], fb.points)}
-        self.n = np.broadcast_to(fb.normals[:, None, :], self.x.shape)
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self.x.shape[:2]
-
-    def value(self, name):
-        key = ("v", name)
-        if key not in self._cache:
-            self._cache[key] = self._fb.tabs[self._asm.disc.field(name).degree].phi @ self._nodal(name)
-        return self._cache[key]
-
-    def dot(self, name):
-        key = ("d", name)
-        if key not in self._cache:
-            self._cache[key] = self._fb.tabs[self._asm.disc.field(name).degree].phi @ \
-                self._nodal(name, dot=True)
-        return self._cache[key]
-
-    def grad(self, name):  # pragma: no cover - not needed by the present facet terms
-        raise NotImplementedError("facet kernels receive values only")
-
-
 @dataclass
 class _FacetBatch:
     """Boundary facets that share the local facet number within their cell."""
@@ -202,26 +79,27 @@ class Assembler:
     """Residual and Jacobian of a ``Model`` on a ``Discretisation``."""
 
     def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
-                 quad_degree: int | None = None, region: str = "matrix", inv_rscale=None):
-        """``region``: the name of the elements integrated over ("matrix": the
-        mesh's cells; "fracture": ``disc.regions["fracture"]``, a
-        ``fracture.FractureSurface``); only the model's terms on that region
-        are assembled.  "REGION@lumped": the same elements with the vertex
+                 quad_degree: int | None = None, region: Region = MATRIX, inv_rscale=None):
+        """``region``: the elements integrated over (the mesh's cells, or the
+        fracture's: ``disc.regions[Domain.FRACTURE]``, a
+        ``fracture.FractureSurface``) and the rule; only the model's terms on
+        that region are assembled.  A lumped region has the vertex
         quadrature rule (row-sum lumping of P1 mass-type terms: capacity,
         wall exchange), which keeps the discrete maximum principle where the
-        consistent mass matrix breaks it (thin elements, small steps).  ``inv_rscale``: per local dof, 1/(residual scale of
-        the row it is added to) (default: from ``scales``)."""
+        consistent mass matrix breaks it (thin elements, small steps).
+        ``inv_rscale``: per local dof, 1/(residual scale of the row it is
+        added to) (default: from ``scales``)."""
         self.disc, self.region = disc, region
-        self.base, _, variant = region.partition("@")
+        self.base = region.domain
         self.model = Model(model.fields, [t for t in model.residuals if t.region == region],
                            [t for t in model.jacobians if t.region == region],
-                           model.facets if region == "matrix" else [])
+                           model.facets if region == MATRIX else [])
         self.mesh = disc.regions[self.base]
         self.scales = scales
         self.inv_rscale = inv_rscale if inv_rscale is not None else self.default_inv_rscale(disc, scales)
         dim = self.mesh.rdim
         pmax = max(f.degree for f in disc.fields)
-        self.rule = fe.vertex_rule(dim) if variant == "lumped" else fe.rule(dim, quad_degree or 2 * pmax)
+        self.rule = fe.vertex_rule(dim) if region.lumped else fe.rule(dim, quad_degree or 2 * pmax)
         self._tabs = {p: _Tab(dim, p, self.rule.points) for p in (1, 2)}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
         self._ref_cache = {}
@@ -238,8 +116,8 @@ class Assembler:
             inv[t.dofs] = 1.0 / scales[t.target].rscale
         return inv
 
-    def dofs(self, name) -> np.ndarray:
-        """Element dofs of a field (or trace, "Tm+") on this region's elements."""
+    def dofs(self, name: FieldRef) -> np.ndarray:
+        """Element dofs of a field (or a ``Trace``) on this region's elements."""
         return self.disc.region_dofs(self.base, name)
 
     def scale(self, name) -> FieldScale:
@@ -281,12 +159,14 @@ class Assembler:
         return R.ravel(), C.ravel()
 
     def _build_pattern(self):
+        """COO rows and columns in the order ``jacobian_values`` fills them:
+        chunk by chunk, every block of a chunk, then the facet terms."""
         rows, cols = [], []
-        allcells = np.arange(self.mesh.ncells)
-        for jb in self.model.jacobians:
-            r, c = self._block_index(jb.test, jb.trial, allcells)
-            rows.append(r)
-            cols.append(c)
+        for cells in self._chunks():
+            for jb in self.model.jacobians:
+                r, c = self._block_index(jb.test, jb.trial, cells)
+                rows.append(r)
+                cols.append(c)
         for ft in self.model.facets:
             if ft.g0 is None:
                 continue
@@ -300,12 +180,6 @@ class Assembler:
         self.coo_rows = rows[self._keep]
         self.coo_cols = cols[self._keep]
         self._all_kept = bool(self._keep.all())
-
-    def create_matrix(self) -> PETSc.Mat:
-        """An AIJ matrix with the DM's layout and this assembler's COO pattern."""
-        A = self.mesh.dm.createMat()
-        compat.coo_preallocate(A, self.coo_rows, self.coo_cols)
-        return A
 
     # -- residual -------------------------------------------------------------
     def _chunks(self):
@@ -347,9 +221,9 @@ class Assembler:
         """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot."""
         out = np.empty(self._keep.size)
         pos = 0
-        for jb in self.model.jacobians:
-            for cells in self._chunks():
-                ctx = CellContext(self, cells, xl, xdl, t, shift)
+        for cells in self._chunks():
+            ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
+            for jb in self.model.jacobians:
                 K = self._cell_block(jb, ctx, cells)
                 rowfac = self.inv_rscale[self.dofs(jb.test)[cells]] * self.scale(jb.trial).scale
                 K = (K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel()

@@ -18,9 +18,8 @@ conservation together with the nonlinear solver's convergence.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
 
-import numpy as np
+from .model import Region
 
 
 @dataclass(frozen=True)
@@ -30,7 +29,7 @@ class Conserved:
     name: str
     fields: tuple
     well_field: str
-    storage: dict            # {region: integrand(ctx) -> (nc, nq)}
+    storage: dict            # {Domain: integrand(ctx) -> (nc, nq)}
 
 
 class BalanceMonitor:
@@ -44,7 +43,8 @@ class BalanceMonitor:
     def stored(self, xl, t) -> dict:
         out = {}
         for b in self.balances:
-            out[b.name] = sum(self.problem.region(r).integrate(xl, f, t) for r, f in b.storage.items())
+            out[b.name] = sum(self.problem.region(Region(d)).integrate(xl, f, t) for d,
+                              f in b.storage.items())
         return out
 
     def __call__(self, t: float, X) -> dict:
@@ -81,16 +81,3 @@ class BalanceMonitor:
         self._prev = (t, X.copy(), S1)
         Xdot.destroy()
         return out
-
-
-def cumulative(values: list[tuple[float, float]]) -> float:
-    """Backward-Euler (right-rectangle) time integral of (t, rate) samples."""
-    acc, t_prev = 0.0, None
-    for t, r in values:
-        if t_prev is not None:
-            acc += (t - t_prev) * r
-        t_prev = t
-    return acc
-
-
-__all__ = ["Conserved", "BalanceMonitor", "cumulative", "np", "Callable"]

@@ -77,13 +77,6 @@ def set_local_section(dm: PETSc.DM, section: PETSc.Section) -> None:
         dm.setSection(section)
 
 
-def get_local_section(dm: PETSc.DM) -> PETSc.Section:
-    """DMGetLocalSection (named getSection in petsc4py < 3.20)."""
-    if hasattr(dm, "getLocalSection"):
-        return dm.getLocalSection()
-    return dm.getSection()
-
-
 # --------------------------------------------------------------------------
 # COO assembly
 # --------------------------------------------------------------------------

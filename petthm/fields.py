@@ -9,14 +9,58 @@ the local vector and are built once, in the node order of ``fe.tabulate``.
 """
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Sequence, Union
 
 import numpy as np
 from petsc4py import PETSc
 
-from . import compat, fe
+from . import compat
 from .mesh import Mesh, simplex_stratum
+
+
+class Domain(enum.Enum):
+    """Where a field lives and a term is integrated."""
+    MATRIX = "matrix"            # the cells of the (split) mesh
+    FRACTURE = "fracture"        # the - faces of the cohesive cells
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Side(enum.Enum):
+    """A face of a fracture; ``sign`` is +1 on the face the normal points to."""
+    MINUS = "-"
+    PLUS = "+"
+
+    @property
+    def sign(self) -> float:
+        return 1.0 if self is Side.PLUS else -1.0
+
+
+@dataclass(frozen=True)
+class Trace:
+    """A matrix field seen on one face of the fracture (its nodes in the - face's order)."""
+    field: str
+    side: Side
+
+    def __str__(self) -> str:
+        return self.field + self.side.value
+
+
+def traces(name: str) -> tuple[Trace, Trace]:
+    """The traces of a matrix field on the - and the + face."""
+    return Trace(name, Side.MINUS), Trace(name, Side.PLUS)
+
+
+#: a field name, or the trace of a matrix field on a fracture face
+FieldRef = Union[str, Trace]
+
+
+def base_field(ref: FieldRef) -> str:
+    """The field of a field reference."""
+    return ref.field if isinstance(ref, Trace) else ref
 
 
 @dataclass(frozen=True)
@@ -26,7 +70,7 @@ class FieldSpec:
     name: str
     ncomp: int = 1
     degree: int = 2
-    region: str = "matrix"          # "matrix" (cells) or "fracture" (- faces of cohesive cells)
+    region: Domain = Domain.MATRIX
 
 
 @dataclass
@@ -74,7 +118,8 @@ class Discretisation:
         self.dm = dm or mesh.dm
         self.fields = list(fields)
         self.index = {f.name: i for i, f in enumerate(self.fields)}
-        self.regions = dict(regions or {}, matrix=mesh)
+        self.regions = dict(regions or {})
+        self.regions[Domain.MATRIX] = mesh
         dirichlet = dirichlet or {}
         dm = self.dm
         self.depths = {f.name: (0, 1) if f.degree == 2 else (0,) for f in self.fields}
@@ -103,7 +148,7 @@ class Discretisation:
     def _tied_points(self, f: str) -> np.ndarray:
         from .fracture import MINUS_LABEL, PLUS_LABEL
         g = self.ties_spec[f]
-        if self.field(f).region != "matrix" or self.field(g).region != "fracture" or \
+        if self.field(f).region is not Domain.MATRIX or self.field(g).region is not Domain.FRACTURE or \
                 self.field(f).degree != self.field(g).degree or self.field(f).ncomp != 1:
             raise ValueError(f"cannot tie {f} to {g}: need a scalar matrix field and a "
                              "fracture field of the same degree")
@@ -130,7 +175,8 @@ class Discretisation:
         lo, hi = self.ownership_range()
         own = (gg >= lo) & (gg < hi)
         comm = self.mesh.dm.comm.tompi4py()
-        allc = np.concatenate(comm.allgather(self.mesh.point_coordinates(gp[own])) or [np.zeros((0, self.mesh.dim))])
+        allc = np.concatenate(
+            comm.allgather(self.mesh.point_coordinates(gp[own])) or [np.zeros((0, self.mesh.dim))])
         allg = np.concatenate(comm.allgather(gg[own]))
         free = ~constrained
         target = np.full(len(pts), -1, dtype=compat.INT)
@@ -152,7 +198,7 @@ class Discretisation:
         (label ``fracture.MINUS_LABEL``, made before distribution so that
         ranks agree on shared points)."""
         pts = np.concatenate([np.arange(*simplex_stratum(self.dm, d)) for d in self.depths[f.name]])
-        if f.region == "fracture":
+        if f.region is Domain.FRACTURE:
             from .fracture import MINUS_LABEL
             on = self.mesh.label_points(None, label=MINUS_LABEL)
             pts = np.intersect1d(pts, on)
@@ -203,7 +249,7 @@ class Discretisation:
         label (value 1) on its support points, so that no dofs go onto the
         prism-tensor edges of cohesive cells or off a fracture."""
         hybrid = simplex_stratum(self.dm, 1)[1] != self.dm.getDepthStratum(1)[1]
-        if not hybrid and all(f.region == "matrix" for f in self.fields):
+        if not hybrid and all(f.region is Domain.MATRIX for f in self.fields):
             return [None] * len(self.fields)
         labels = []
         for f in self.fields:
@@ -247,7 +293,9 @@ class Discretisation:
         if f.degree == 2:
             points = np.hstack([points, m.cell_edges])
         base = self.offsets[f.name][points - self.pstart]                # (nc, nb)
-        return (base[:, :, None] + np.arange(f.ncomp)).reshape(len(base), base.shape[1] * f.ncomp).astype(compat.INT)
+        return (base[:, :,
+                     None] + np.arange(f.ncomp)).reshape(len(base),
+                                                         base.shape[1] * f.ncomp).astype(compat.INT)
 
     def _dirichlet(self, f: FieldSpec, boundary: str, comps=None) -> DirichletDofs:
         pts = np.concatenate([self.mesh.label_points(boundary, d) for d in self.depths[f.name]])
@@ -258,18 +306,20 @@ class Discretisation:
                              components=comps)
 
     # -- element dofs per region (traces of matrix fields on the fracture) ------
-    def region_dofs(self, region: str, name: str) -> np.ndarray:
-        """Element dofs of ``name`` on a region's elements: the field's own
-        elements, or on the fracture the trace of a matrix field on the - face
-        ("Tm-") or on the paired + face ("Tm+"), nodes in the - face's order."""
-        if region == self.field(name).region and name in self.index:
+    def region_dofs(self, region: Domain, name: FieldRef) -> np.ndarray:
+        """Element dofs of a field on a domain's elements: the field's own
+        elements, or on the fracture a ``Trace`` of a matrix field on the -
+        face or on the paired + face, nodes in the - face's order."""
+        if not isinstance(name, Trace):
+            if region is not self.field(name).region:
+                raise ValueError(f"field {name} does not live on the {region} (use a Trace)")
             return self.elem_dofs[name]
         key = (region, name)
         if key not in self._trace_cache:
-            base, side = name[:-1], name[-1]
+            base = name.field
             surf = self.regions[region]
             f = self.field(base)
-            verts, edges = (surf.cell_vertices, surf.cell_edges) if side == "-" else \
+            verts, edges = (surf.cell_vertices, surf.cell_edges) if name.side is Side.MINUS else \
                 (surf.plus_vertices, surf.plus_edges)
             points = verts + surf.vstart
             if f.degree == 2:
@@ -280,14 +330,9 @@ class Discretisation:
         return self._trace_cache[key]
 
     # -- helpers ----------------------------------------------------------------
-    def field(self, name: str) -> FieldSpec:
-        """The FieldSpec of a field, or of the matrix field of a trace name ("Tm+")."""
-        if name not in self.index and name[-1:] in "+-":
-            name = name[:-1]
-        return self.fields[self.index[name]]
-
-    def nodes_per_cell(self, name: str) -> int:
-        return fe.nodes_per_cell(self.mesh.dim, self.field(name).degree)
+    def field(self, name: FieldRef) -> FieldSpec:
+        """The FieldSpec of a field, or of the matrix field of a ``Trace``."""
+        return self.fields[self.index[base_field(name)]]
 
     def node_points(self, name: str) -> np.ndarray:
         """The mesh points carrying the field's nodes: vertices (+ simplex edges for P2)."""

@@ -314,35 +314,6 @@ def fracture_vertex_counts(dm: PETSc.DMPlex) -> dict[int, tuple[int, int]]:
     return out
 
 
-def main(argv=None) -> int:
-    """``python -m petthm.fracture MESH.msh``: split, distribute, print JSON statistics."""
-    import json
-    import sys
-    import petsc4py
-    argv = sys.argv[1:] if argv is None else argv
-    petsc4py.init([sys.argv[0]] + argv[1:])
-    from .mesh import read_plex
-    dm = read_plex(argv[0], PETSc.COMM_WORLD)
-    counts = fracture_vertex_counts(dm)
-    before = {"cells": dm.comm.tompi4py().allreduce(dm.getHeightStratum(0)[1]),
-              "vertices": dm.comm.tompi4py().allreduce(dm.getDepthStratum(0)[1] - dm.getDepthStratum(0)[0]),
-              "facets": {t: int(dm.getStratumSize(FACE_SETS, t)) for t in counts}, "fracture_vertices": counts}
-    dm, infos = split_fractures(dm)
-    normals = [i.normal for i in infos]
-    serial = split_statistics(dm, normals)
-    if dm.comm.size > 1:
-        dm.distribute()
-    stats = {"before": before, "serial": serial, "distributed": split_statistics(dm, normals),
-             "ranks": dm.comm.size, "normals": [n.tolist() for n in normals]}
-    if dm.comm.rank == 0:
-        print(json.dumps(stats))
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
-
-
 class FractureSurface:
     """The - faces of the local cohesive cells as (dim-1)-simplices embedded in
     the mesh: the element region of the fracture fields ``pf``, ``Tf``.

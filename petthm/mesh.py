@@ -22,6 +22,11 @@ from .errors import InputError
 BoundaryPredicate = Callable[[np.ndarray], np.ndarray]
 
 
+def _mpi_max():
+    from mpi4py import MPI
+    return MPI.MAX
+
+
 def label_name(boundary: str) -> str:
     """DMLabel name of a named boundary part."""
     return f"thm_bc_{boundary}"
@@ -173,7 +178,8 @@ class Mesh:
       cell_vertices (nc, d+1): vertex indices relative to vStart, ascending;
       cell_edges (nc, ne): edge points in the VTK order of ``fe.EDGES``;
       vertex_coords (nv, d); edge_midpoints (nedge, d);
-      J, Jinv (nc, d, d), detJ (nc,): affine map x = x0 + J xi; h (nc,) longest edge.
+      J, Jinv (nc, d, d), detJ (nc,): affine map x = x0 + J xi; h (nc,) longest edge;
+      fracture: the ``fracture.FractureSurface`` of a split mesh, or None.
     """
     dm: PETSc.DMPlex
     dim: int = 0
@@ -202,6 +208,10 @@ class Mesh:
         self.edge_vertices = topo.cones[1] - self.vstart
         self.cell_edges = self._ordered_cell_edges(topo, cells)
         self._geometry()
+        from .fracture import MINUS_LABEL, FractureSurface
+        #: the fracture faces of a mesh split along its fractures (``fracture.split_fractures``), or None
+        split = dm.comm.tompi4py().allreduce(int(dm.hasLabel(MINUS_LABEL)), op=_mpi_max())
+        self.fracture = FractureSurface(self) if split else None
 
     # -- topology -----------------------------------------------------------
     def _ordered_cell_edges(self, topo, cells):
@@ -229,12 +239,9 @@ class Mesh:
         out[ise] = self.edge_midpoints()[points[ise] - self.estart]
         return out
 
-    def cell_points(self, x_ref: np.ndarray) -> np.ndarray:
-        """Physical coordinates (nc, nq, d) of reference points (nq, d)."""
-        return self.x0[:, None, :] + np.einsum("cak,qk->cqa", self.J, x_ref)
-
     # -- boundaries ---------------------------------------------------------
-    def label_points(self, name: str | None, depth: int | None = None, label: str | None = None) -> np.ndarray:
+    def label_points(self, name: str | None, depth: int | None = None,
+                     label: str | None = None) -> np.ndarray:
         """Local points carrying a boundary label (or the DMLabel ``label``),
         optionally of one depth."""
         lname = label or label_name(name)

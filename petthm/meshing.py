@@ -51,12 +51,14 @@ def _grade(gmsh, dim: int, lengths: Sequence[float], size: float, grading: Gradi
         x = lambda u, v: [  # noqa: E731
             {grading.axis: 0.0, other[0]: u, other[1]: v}[k] for k in range(3)]
         pts = [occ.addPoint(*x(u, v)) for u, v in
-               [(0, 0), (lengths[other[0]], 0), (lengths[other[0]], lengths[other[1]]), (0, lengths[other[1]])]]
+               [(0, 0), (lengths[other[0]], 0), (lengths[other[0]], lengths[other[1]]),
+                (0, lengths[other[1]])]]
         loop = occ.addCurveLoop([occ.addLine(pts[i], pts[(i + 1) % 4]) for i in range(4)])
         ent = occ.addPlaneSurface([loop])
         kind = "SurfacesList"
     occ.synchronize()
-    thr = _threshold(gmsh.model.mesh.field, kind, [ent], grading.size_min, size, grading.distance, sampling=200)
+    thr = _threshold(gmsh.model.mesh.field, kind, [ent], grading.size_min, size, grading.distance,
+                     sampling=200)
     _background_size(gmsh, [thr])
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
 
@@ -142,7 +144,8 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     Physical groups: the domain (cells, tag 1), its outer boundary (facets,
     ``BOUNDARY_TAG``), fracture ``i`` (facets, ``FRACTURE_TAG0 + i``), its tip
     (the fracture's edges, or end points in 2D, inside the domain,
-    ``TIP_TAG0 + i``) and well ``i`` (a point, ``WELL_TAG0 + i``).  With ``grading_distance`` > 0 the size grows
+    ``TIP_TAG0 + i``) and well ``i`` (a point, ``WELL_TAG0 + i``).
+    With ``grading_distance`` > 0 the size grows
     linearly from each fracture's ``size`` to ``size`` over that distance.
     ``wells``: points (on a fracture) that become mesh vertices, with mesh
     size ``well_size`` (default: the fracture's) growing away from them.
@@ -220,7 +223,8 @@ def layered_half_box_with_disc(path: str, half: float, radius: float, size: floa
     h = layer_heights(layer, ratio, half)
     cum = list(np.cumsum(h) / half)
     for dz in (half, -half):
-        occ.extrude([(2, t) for t in plane], 0.0, 0.0, dz, numElements=[1] * len(h), heights=cum, recombine=False)
+        occ.extrude([(2, t) for t in plane], 0.0, 0.0, dz, numElements=[1] * len(h), heights=cum,
+                    recombine=False)
     occ.synchronize()
     on_outer = _tag_domain(gmsh, 3, [t for (_, t) in gmsh.model.getEntities(3)])
     _tag_fracture(gmsh, 3, 0, on_disc, on_outer)

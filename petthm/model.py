@@ -8,37 +8,63 @@ consistent SUPG term of P2 elements needs) and the facet terms of the
 Neumann/Robin conditions.  Kernels are functions ``kernel(ctx)`` of a
 quadrature context (see ``assembly.CellContext``) returning arrays over
 (cells, quadrature points, ...); parameters are bound with closures.
+
+Where a term lives is typed: a ``Region`` is a ``Domain`` (the matrix cells,
+or the - faces of the cohesive cells of the fracture) with its quadrature
+rule (Gauss, or the vertex rule of row-sum lumping); on the fracture a
+matrix field is seen through a ``Trace`` on one face (``Side``).  Models are
+composed by the builders of ``petthm.builders``.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
-from .fields import FieldSpec
+from .fields import Domain, FieldRef, FieldSpec, Side, Trace, base_field, traces  # noqa: F401
 
 Kernel = Callable[..., "object"]
 
 
 @dataclass(frozen=True)
+class Region:
+    """A domain with a quadrature rule: ``lumped`` integrates with the vertex
+    rule (row-sum lumping of P1 mass-type terms)."""
+    domain: Domain = Domain.MATRIX
+    lumped: bool = False
+
+    def __lt__(self, other: "Region") -> bool:     # matrix after fracture, lumped after Gauss
+        return (self.domain.value, self.lumped) < (other.domain.value, other.lumped)
+
+    def __str__(self) -> str:
+        return self.domain.value + ("@lumped" if self.lumped else "")
+
+
+MATRIX = Region(Domain.MATRIX)
+FRACTURE = Region(Domain.FRACTURE)
+FRACTURE_LUMPED = Region(Domain.FRACTURE, lumped=True)
+MATRIX_LUMPED = Region(Domain.MATRIX, lumped=True)
+
+
+@dataclass(frozen=True)
 class CellResidual:
     """Residual of ``field`` on the cells: int f0 . v + f1 : grad v."""
-    field: str
+    field: FieldRef
     f0: Optional[Kernel] = None
     f1: Optional[Kernel] = None
-    region: str = "matrix"
+    region: Region = MATRIX
 
 
 @dataclass(frozen=True)
 class CellJacobian:
     """d(residual of ``test``)/d(``trial``) (+ shift * d/d(trial_dot))."""
-    test: str
-    trial: str
+    test: FieldRef
+    trial: FieldRef
     g0: Optional[Kernel] = None
     g1: Optional[Kernel] = None
     g2: Optional[Kernel] = None
     g3: Optional[Kernel] = None
     g2_lap: Optional[Kernel] = None
-    region: str = "matrix"
+    region: Region = MATRIX
 
 
 @dataclass(frozen=True)
@@ -65,14 +91,17 @@ class PointTerm:
     jacobian: Kernel
 
 
+#: the residual and Jacobian registrations of one physical term
+Terms = tuple[list, list]
+
+
 @dataclass
 class Model:
-    """The active fields and every term, each on its region ("matrix": the
-    cells; "fracture": the - faces of the cohesive cells, where the names
-    "Tm-"/"Tm+" denote the traces of a matrix field on the two faces).
-    ``bounds`` make the problem a variational inequality (contact: the
-    traction ``lam`` >= 0), solved by SNES's VI Newton methods."""
-    fields: list[FieldSpec]
+    """The active fields and every term, each on its region.  ``bounds``
+    make the problem a variational inequality (contact: the traction
+    ``lam`` >= 0), solved by SNES's VI Newton methods; ``ties`` make a matrix
+    field's nodes on the fracture walls the fracture field's unknowns."""
+    fields: list[FieldSpec] = field(default_factory=list)
     residuals: list[CellResidual] = field(default_factory=list)
     jacobians: list[CellJacobian] = field(default_factory=list)
     facets: list[FacetTerm] = field(default_factory=list)
@@ -80,5 +109,19 @@ class Model:
     ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
     bounds: dict = field(default_factory=dict)    # {field: (lower, upper)} SI, None: unbounded
 
-    def regions(self) -> list[str]:
+    def regions(self) -> list[Region]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})
+
+    def has(self, name: str) -> bool:
+        return any(f.name == name for f in self.fields)
+
+    def add_field(self, spec: FieldSpec) -> None:
+        if self.has(spec.name):
+            raise ValueError(f"field {spec.name} is already in the model")
+        self.fields.append(spec)
+
+    def add(self, terms: Terms) -> None:
+        """Register the residuals and Jacobian blocks of a term."""
+        res, jac = terms
+        self.residuals += res
+        self.jacobians += jac

@@ -15,7 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .fields import Discretisation, FieldSpec
+from .fields import Discretisation, Domain, FieldSpec
 
 TOPOLOGY = {(1, 1): ("Polyline", 2), (1, 2): ("Edge_3", 3),
             (2, 1): ("Triangle", 3), (2, 2): ("Triangle_6", 6),
@@ -58,22 +58,22 @@ def write_summary(path: str, summary: dict, rank: int) -> None:
 
 
 class FieldWriter:
-    """Time series of nodal fields on the matrix mesh, or (``region="fracture"``)
+    """Time series of nodal fields on the matrix mesh, or (``Domain.FRACTURE``)
     on the fracture surface (the - faces), one degree for all."""
 
     def __init__(self, disc: Discretisation, directory: str, degree: int, stem: str = "fields",
-                 region: str = "matrix"):
+                 region: Domain = Domain.MATRIX):
         mesh = disc.mesh
         self.comm = mesh.dm.comm.tompi4py()
         self.rank = self.comm.rank
         self.dim = mesh.dim
-        self.rdim = mesh.dim if region == "matrix" else mesh.dim - 1
+        self.rdim = mesh.dim if region is Domain.MATRIX else mesh.dim - 1
         self.degree = degree
         self.h5path = os.path.join(directory, stem + ".h5")
         self.xdmfpath = os.path.join(directory, stem + ".xdmf")
         self.h5name = stem + ".h5"
         dmo = mesh.dm.clone()
-        regions = {} if region == "matrix" else {region: disc.regions[region]}
+        regions = {} if region is Domain.MATRIX else {region: disc.regions[region]}
         nodes = Discretisation(mesh, [FieldSpec("node", 1, degree, region)], dm=dmo, regions=regions)
         gid = nodes.global_index
         self.local_gid = gid[nodes.field_local_dofs("node")[:, 0]]

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-from typing import Any, Iterable
+import math
+from typing import Any, Callable, Iterable, Sequence
 
 from petsc4py import PETSc
 
@@ -22,10 +23,13 @@ CELSIUS = 273.15
 
 
 def param(default: Any, unit: str, help: str, lo: float | None = None, hi: float | None = None,
-          lo_open: bool = False, choices: tuple | None = None, option: str | None = None):
-    """Declare a parameter: default (SI, degC for temperatures), unit, help, accepted range."""
+          lo_open: bool = False, choices: tuple | None = None, option: str | None = None,
+          parse: Callable[[str], Any] | None = None):
+    """Declare a parameter: default (SI, degC for temperatures), unit, help,
+    accepted range; ``parse``: text -> value (raising InputError) for values
+    that are not plain numbers (applied to the default too)."""
     return dataclasses.field(default=default, metadata=dict(
-        unit=unit, help=help, lo=lo, hi=hi, lo_open=lo_open, choices=choices, option=option))
+        unit=unit, help=help, lo=lo, hi=hi, lo_open=lo_open, choices=choices, option=option, parse=parse))
 
 
 def option_name(f: dataclasses.Field) -> str:
@@ -36,12 +40,15 @@ def _range_text(md) -> str:
     lo, hi = md.get("lo"), md.get("hi")
     if md.get("choices"):
         return "one of " + ", ".join(map(str, md["choices"]))
-    left = "(" if md.get("lo_open") else "["
-    return f"{left}{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+    left = "(" if md.get("lo_open") or lo is None else "["
+    right = ")" if hi is None else "]"               # values must be finite
+    return f"{left}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{right}"
 
 
 def _convert(f: dataclasses.Field, raw: str):
     name = option_name(f)
+    if f.metadata.get("parse"):
+        return f.metadata["parse"](raw)
     kind = type(f.default)
     try:
         if kind is bool:
@@ -73,10 +80,15 @@ def _check(f: dataclasses.Field, value) -> None:
             continue
         lo, hi = md.get("lo"), md.get("hi")
         bad = (lo is not None and (v < lo or (md.get("lo_open") and v == lo))) or \
-              (hi is not None and v > hi) or v != v
+              (hi is not None and v > hi) or not math.isfinite(v)
         if bad:
             raise InputError(f"option -{name} = {v} {md['unit']} is outside the accepted range "
                              f"{_range_text(md)}")
+
+
+def _default(f: dataclasses.Field):
+    parse = f.metadata.get("parse")
+    return parse(f.default) if parse else f.default
 
 
 def read(cls, options: PETSc.Options | None = None):
@@ -88,9 +100,45 @@ def read(cls, options: PETSc.Options | None = None):
         if opts.hasName(name):
             values[f.name] = _convert(f, opts.getString(name, ""))
         else:
-            values[f.name] = f.default
+            values[f.name] = _default(f)
         _check(f, values[f.name])
     return cls(**values)
+
+
+def merged(groups: Iterable[type], base: type = object) -> type:
+    """One frozen dataclass with every field of ``groups`` (each option once)."""
+    fields, seen = [], {}
+    for g in groups:
+        for f in dataclasses.fields(g):
+            if f.name in seen:
+                raise TypeError(f"parameter {f.name} is in both {seen[f.name]} and {g.__name__}")
+            seen[f.name] = g.__name__
+            fields.append((f.name, f.type, dataclasses.field(default=f.default, metadata=f.metadata)))
+    return dataclasses.make_dataclass("SceneParameters", fields, bases=(base,), frozen=True)
+
+
+def read_all(groups: Sequence[type], base: type = object, options: PETSc.Options | None = None):
+    """Read several parameter groups into one frozen object (see ``merged``)."""
+    return read(merged(groups, base), options)
+
+
+def values_in_effect(p) -> dict:
+    """{option: value} of a parameter object (values as numbers, lists or text)."""
+    out = {}
+    for f in dataclasses.fields(p):
+        v = getattr(p, f.name)
+        out["-" + option_name(f)] = v if isinstance(v, (int, float, str, bool)) else \
+            list(v) if isinstance(v, tuple) else str(v)
+    return out
+
+
+def with_defaults(cls, **defaults):
+    """A copy of a parameter dataclass with other default values (same options)."""
+    fields = []
+    for f in dataclasses.fields(cls):
+        default = defaults.get(f.name, f.default)
+        fields.append((f.name, f.type, dataclasses.field(default=default, metadata=f.metadata)))
+    return dataclasses.make_dataclass(cls.__name__, fields, frozen=True, namespace={"__doc__": cls.__doc__})
 
 
 def known_options(classes: Iterable[type]) -> set[str]:
@@ -117,15 +165,12 @@ def help_text(classes: Iterable[type]) -> str:
             md = f.metadata
             d = f.default
             d = ",".join(map(str, d)) if isinstance(d, tuple) else d
+            d = f"{d:g}" if isinstance(d, float) else d
             rng = _range_text(md) if (md.get("lo") is not None or md.get("hi") is not None
                                       or md.get("choices")) else ""
             lines.append(f"    -{option_name(f):<34} {str(d):>12} {md['unit']:<10} {md['help']}"
                          + (f"  {rng}" if rng else ""))
     return "\n".join(lines)
-
-
-def as_dict(p) -> dict:
-    return dataclasses.asdict(p)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -1,6 +1,7 @@
 """Mechanics studies (issue 4): CSV, PNG and markdown tables.
 
-    python scripts/contact_study.py [--out benchmarks/results/contact] [--study sneddon,vi,mandel] [--plot-only]
+    python scripts/contact_study.py [--out benchmarks/results/contact] [--study sneddon,vi,mandel]
+                                    [--plot-only]
 
 * ``sneddon``: error against run time for the Griffith (2D) and penny (3D)
   cracks, P1 and P2, three or four crack mesh sizes each: the error of the
@@ -44,13 +45,16 @@ def sneddon_study(out):
         for degree in (1, 2):
             for h in SNEDDON_SIZES[dim]:
                 d = os.path.join(out, "runs", f"sneddon{dim}d_P{degree}_h{h}")
-                s = run_petthm("sneddon", d, *SNEDDON[dim], "-thm_fe_degree", degree, "-thm_sneddon_crack_size", h)
+                s = run_petthm("sneddon", d, *SNEDDON[dim], "-thm_fe_degree", degree,
+                               "-thm_sneddon_crack_size", h)
                 e = s["error"]
                 rows.append({"dim": dim, "degree": degree, "crack_size_over_R": h, "cells": s["cells"],
                              "dofs": sum(s["dofs"].values()), "wall_s": round(s["wall_time"]["total"], 2),
                              "centre_error": e["centre_error"], "l2_error": e["opening_l2_error"]})
-                print(f"sneddon {dim}D P{degree} h={h}: {rows[-1]['wall_s']} s, centre {e['centre_error']:.2e}, "
-                      f"L2 {e['opening_l2_error']:.2e}", flush=True)
+                print(
+                    f"sneddon {dim}D P{degree} h={h}: {rows[-1]['wall_s']} s, "
+                    f"centre {e['centre_error']:.2e}, "
+                    f"L2 {e['opening_l2_error']:.2e}", flush=True)
     write_csv(os.path.join(out, "sneddon.csv"), rows)
     return rows
 
@@ -62,7 +66,8 @@ def mandel_study(out):
             d = os.path.join(out, "runs", f"mandel_P{degree}_h{h}")
             s = run_petthm("mandel", d, "-thm_fe_degree", degree, "-thm_mesh_size", h)
             e = s["error"]
-            rows.append({"degree": degree, "mesh_size": h, "cells": s["cells"], "dofs": sum(s["dofs"].values()),
+            rows.append({"degree": degree, "mesh_size": h, "cells": s["cells"],
+                         "dofs": sum(s["dofs"].values()),
                          "steps": s["steps"], "wall_s": round(s["wall_time"]["total"], 2),
                          "p_max_rel": e["p_max_rel"], "cryer_peak_rel": e["mandel_cryer_peak_rel_p0"]})
             print(f"mandel P{degree} h={h}: {rows[-1]['wall_s']} s, p error {e['p_max_rel']:.2e}, "
@@ -77,10 +82,12 @@ def plot_mandel(out, rows):
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for ax, key, title, lim in zip(axes, ("p_max_rel", "cryer_peak_rel"),
-                                   ("max nodal pressure error / p0", "Mandel-Cryer peak error / p0"), (1e-2, 5e-3)):
+                                   ("max nodal pressure error / p0", "Mandel-Cryer peak error / p0"),
+                                   (1e-2, 5e-3)):
         for deg, mk in (("1", "s--"), ("2", "o-")):
             sel = [r for r in rows if str(r["degree"]) == deg]
-            ax.loglog([float(r["wall_s"]) for r in sel], [float(r[key]) for r in sel], mk, label=f"P{deg} u / P1 pm")
+            ax.loglog([float(r["wall_s"]) for r in sel], [float(r[key]) for r in sel], mk,
+                      label=f"P{deg} u / P1 pm")
         ax.axhline(lim, color="grey", lw=0.8, ls=":")
         ax.set_xlabel("wall time (s)")
         ax.set_ylabel("error / p0")
@@ -132,7 +139,8 @@ def plot_sneddon(out, rows):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    for ax, key, title in zip(axes, ("centre_error", "l2_error"), ("opening at the centre", "opening, L2 over r < 0.95 R")):
+    for ax, key, title in zip(axes, ("centre_error", "l2_error"),
+                              ("opening at the centre", "opening, L2 over r < 0.95 R")):
         for dim in ("2", "3"):
             for deg, mk in (("1", "s--"), ("2", "o-")):
                 sel = [r for r in rows if str(r["dim"]) == dim and str(r["degree"]) == deg]
@@ -150,27 +158,35 @@ def plot_sneddon(out, rows):
 def markdown(out, sneddon_rows, vi_rows, mandel_rows=()):
     lines = []
     if mandel_rows:
-        lines += ["| mandel | mesh (m) | cells | dofs | steps | wall (s) | max p error / p0 | Cryer peak error / p0 |",
-                  "|---|---|---|---|---|---|---|---|"]
+        lines += [
+            "| mandel | mesh (m) | cells | dofs | steps | wall (s) | max p error / p0 "
+            "| Cryer peak error / p0 |",
+            "|---|---|---|---|---|---|---|---|"]
         for r in mandel_rows:
-            lines.append(f"| P{r['degree']} u / P1 pm | {r['mesh_size']} | {r['cells']} | {r['dofs']} | {r['steps']} | "
-                         f"{float(r['wall_s']):.2f} | {float(r['p_max_rel']):.2e} | {float(r['cryer_peak_rel']):.2e} |")
+            lines.append(
+                f"| P{r['degree']} u / P1 pm | {r['mesh_size']} | {r['cells']} | {r['dofs']} | "
+                f"{r['steps']} | {float(r['wall_s']):.2f} | {float(r['p_max_rel']):.2e} | "
+                f"{float(r['cryer_peak_rel']):.2e} |")
         lines.append("")
     if sneddon_rows:
-        lines += ["| crack | P | h/R | cells | dofs | wall (s) | w(0) error | L2 error |", "|---|---|---|---|---|---|---|---|"]
+        lines += ["| crack | P | h/R | cells | dofs | wall (s) | w(0) error | L2 error |",
+                  "|---|---|---|---|---|---|---|---|"]
         for r in sneddon_rows:
             name = "Griffith 2D" if str(r["dim"]) == "2" else "penny 3D"
-            lines.append(f"| {name} | {r['degree']} | {r['crack_size_over_R']} | {r['cells']} | {r['dofs']} | "
-                         f"{float(r['wall_s']):.2f} | {float(r['centre_error']):.2e} | {float(r['l2_error']):.2e} |")
+            lines.append(
+                f"| {name} | {r['degree']} | {r['crack_size_over_R']} | {r['cells']} | {r['dofs']} | "
+                f"{float(r['wall_s']):.2f} | {float(r['centre_error']):.2e} | {float(r['l2_error']):.2e} |")
         lines.append("")
     if vi_rows:
         lines += ["| solver | method | h/c | Newton per step | max | Krylov per step | rejected | wall (s) | "
-                  "open to (m) | w(0) (mm) | profile diff to finest (mm) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+                  "open to (m) | w(0) (mm) | profile diff to finest (mm) |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|"]
         for r in vi_rows:
-            lines.append(f"| {r['solver']} | {r['method']} | {r['crack_size_over_c']} | {r['newton_per_step']} | "
-                         f"{r['newton_max']} | {r['krylov_per_step']} | {r['rejected']} | {float(r['wall_s']):.2f} | "
-                         f"{float(r['open_length_m']):.3f} | {float(r['opening_centre_mm']):.4f} | "
-                         f"{float(r['profile_diff_to_finest_mm']):.2e} |")
+            lines.append(
+                f"| {r['solver']} | {r['method']} | {r['crack_size_over_c']} | {r['newton_per_step']} | "
+                f"{r['newton_max']} | {r['krylov_per_step']} | {r['rejected']} | {float(r['wall_s']):.2f} | "
+                f"{float(r['open_length_m']):.3f} | {float(r['opening_centre_mm']):.4f} | "
+                f"{float(r['profile_diff_to_finest_mm']):.2e} |")
     with open(os.path.join(out, "tables.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))

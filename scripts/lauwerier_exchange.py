@@ -44,8 +44,10 @@ def main():
     write_csv(os.path.join(a.out, "exchange.csv"), out)
     md = markdown([("exchange", "exchange", ""), ("outlet error vs Lauwerier, t >= 1e6 s (K)",
                     "outlet_error_vs_lauwerier_K", ""),
-                   ("max abs T_prod - T_prod(equilibrium), t >= 1e6 s (K)", "max_dT_prod_vs_equilibrium_K_t_ge_1e6", ""),
-                   ("at 1e8 s (K)", "dT_prod_vs_equilibrium_K_at_1e8", ""), ("energy balance", "energy_balance_max", ".1e"),
+                   ("max abs T_prod - T_prod(equilibrium), t >= 1e6 s (K)",
+                    "max_dT_prod_vs_equilibrium_K_t_ge_1e6", ""),
+                   ("at 1e8 s (K)", "dT_prod_vs_equilibrium_K_at_1e8", ""),
+                   ("energy balance", "energy_balance_max", ".1e"),
                    ("wall (s)", "wall_s", "")], out)
     write_markdown(os.path.join(a.out, "exchange.md"), "lauwerier: wall heat-exchange modes", md)
     print(md)

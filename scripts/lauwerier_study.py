@@ -40,13 +40,15 @@ def run_one(out, degree, level, scheme="beuler"):
     s = run_petthm("lauwerier", d, "-thm_fe_degree", degree, "-thm_lauwerier_fracture_size", fs,
                    "-thm_mesh_size", ms, *dt, *bdf2)
     e = s["error"]
-    row = {"scheme": scheme, "degree": degree, "level": level, "fracture_size": fs, "mesh_size": ms, "dt_growth": g,
+    row = {"scheme": scheme, "degree": degree, "level": level, "fracture_size": fs, "mesh_size": ms,
+           "dt_growth": g,
            "dt_max": dtmax, "cells": s["cells"], "dofs": sum(s["dofs"].values()), "steps": s["steps"],
            "wall_s": round(s["wall_time"]["total"], 2),
            "outlet_error_K": e["outlet_max_rel_t_ge_1e6"] * DT_RANGE,
            "profile_1e7": e["profile_max_rel_t1e+07"], "profile_1e8": e["profile_max_rel_t1e+08"],
            "energy_balance_max": s["balance_max"]["energy_balance"]}
-    print(f"{scheme} P{degree} level {level}: {row['wall_s']} s, outlet error {row['outlet_error_K']:.3f} K", flush=True)
+    print(f"{scheme} P{degree} level {level}: {row['wall_s']} s, outlet error {row['outlet_error_K']:.3f} K",
+          flush=True)
     return row
 
 
@@ -82,10 +84,12 @@ def table(rows) -> str:
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for x in sorted(rows, key=lambda x: (x.get("scheme", "beuler"), int(x["degree"]), int(x["level"]))):
         bal = float(x["energy_balance_max"])
-        lines.append(f"| {x.get('scheme', 'beuler')} | {x['degree']} | {x['level']} | {x['fracture_size']} | {x['dt_growth']} / "
-                     f"{float(x['dt_max']):.2g} | {x['cells']} | {x['dofs']} | {x['steps']} | {x['wall_s']} | "
-                     f"{float(x['outlet_error_K']):.3f} | {float(x['profile_1e7']):.2e} | "
-                     f"{float(x['profile_1e8']):.2e} | {'n/a' if bal != bal else f'{bal:.1e}'} |")
+        lines.append(
+            f"| {x.get('scheme', 'beuler')} | {x['degree']} | {x['level']} | {x['fracture_size']} | "
+            f"{x['dt_growth']} / "
+            f"{float(x['dt_max']):.2g} | {x['cells']} | {x['dofs']} | {x['steps']} | {x['wall_s']} | "
+            f"{float(x['outlet_error_K']):.3f} | {float(x['profile_1e7']):.2e} | "
+            f"{float(x['profile_1e8']):.2e} | {'n/a' if bal != bal else f'{bal:.1e}'} |")
     return "\n".join(lines)
 
 

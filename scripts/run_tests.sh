@@ -1,18 +1,31 @@
 #!/usr/bin/env bash
 # The test command of the README (make test):
-#   1. the default suite with the set-up environment (.venv);
-#   2. in CI (CI=true) or with PETTHM_TEST_NEWEST=1, the same suite against
-#      PETSc 3.26.1 + petsc4py built from PyPI into a cached virtual
-#      environment (~10 min the first time, then reused):
-#      ${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}
+#   1. the linter (ruff, settings in pyproject.toml) over petthm/, tests/,
+#      scripts/, benchmarks/;
+#   2. the default suite with the set-up environment (.venv);
+#   3. in CI (CI=true) or with PETTHM_TEST_NEWEST=1, the groups of the suite
+#      whose code paths differ between PETSc versions against PETSc 3.26.1 +
+#      petsc4py built from PyPI into a cached virtual environment (~10 min the
+#      first time, then reused): ${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}.
+#      They are tests/unit (compat: COO, sections, the cohesive split),
+#      tests/interface (options, output, errors), tests/parallel, tests/solvers
+#      and the contact tests; the verification of the heat, flow,
+#      poroelastic and Scene 2 discretisations (the same numpy kernels and
+#      LU solves on both versions) runs on the first pass only.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+.venv/bin/python -m ruff check petthm tests scripts benchmarks
+start=$(date +%s)
 .venv/bin/python -m pytest -q "$@"
+echo "== default suite: $(( $(date +%s) - start )) s =="
 if [ "${CI:-}" = true ] || [ "${PETTHM_TEST_NEWEST:-0}" = 1 ]; then
   venv=${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}
   mkdir -p "$(dirname "$venv")"
-  echo "== test suite against PETSc 3.26.1 (PyPI build in $venv) =="
+  echo "== the PETSc-dependent groups against PETSc 3.26.1 (PyPI build in $venv) =="
   bash scripts/install_petsc_pypi.sh "$venv"
-  "$venv/bin/python" -m pytest -q "$@"
+  start=$(date +%s)
+  "$venv/bin/python" -m pytest -q tests/unit tests/interface tests/parallel tests/solvers \
+      tests/verification/test_contact.py "$@"
+  echo "== PETSc 3.26.1 pass: $(( $(date +%s) - start )) s =="
 fi

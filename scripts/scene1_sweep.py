@@ -61,13 +61,15 @@ def plots(out):
         if not os.path.exists(os.path.join(d, "summary.json")):
             continue
         h, s = read_history(d), read_summary(d)
-        label = "k = 0" if name == "k0" else ("1D " if name.startswith("1d") else "2D ") + name.split("_")[1] + " m2"
+        label = "k = 0" if name == "k0" else (
+            "1D " if name.startswith("1d") else "2D ") + name.split("_")[1] + " m2"
         ax.semilogx(h["time"], h["production_temperature"], label=label)
         prof = os.path.join(d, "profile_1e8.json")
         if os.path.exists(prof):
             p = json.load(open(prof))
             ax3.plot(p["x"], p["Tf"], label=label)
-        rows.append({"case": name, "permeability": perm, "T_prod_1e8": round(at(h, 1e8, "production_temperature"), 3),
+        rows.append({"case": name, "permeability": perm,
+                     "T_prod_1e8": round(at(h, 1e8, "production_temperature"), 3),
                      "T_prod_1e9": round(float(h["production_temperature"][-1]), 3),
                      "leakoff_fraction_1e8": round(at(h, 1e8, "leakoff_fraction"), 4),
                      "mass_balance_max": s["balance_max"]["mass_balance"],
@@ -108,8 +110,10 @@ def main():
     write_csv(os.path.join(a.out, "scene1.csv"), rows)
     md = markdown([("case", "case", ""), ("-thm_rock_permeability", "permeability", ""),
                    ("T_prod 1e8 s (degC)", "T_prod_1e8", ""), ("T_prod 1e9 s", "T_prod_1e9", ""),
-                   ("leakoff fraction 1e8 s", "leakoff_fraction_1e8", ""), ("mass bal.", "mass_balance_max", ".1e"),
-                   ("energy bal.", "energy_balance_max", ".1e"), ("Tf bound viol.", "Tf_bounds_violation", ".1e"),
+                   ("leakoff fraction 1e8 s", "leakoff_fraction_1e8", ""),
+                   ("mass bal.", "mass_balance_max", ".1e"),
+                   ("energy bal.", "energy_balance_max", ".1e"),
+                   ("Tf bound viol.", "Tf_bounds_violation", ".1e"),
                    ("steps", "steps", ""), ("wall (s)", "wall_s", "")], rows)
     write_markdown(os.path.join(a.out, "scene1.md"), "Scene 1 (rigid_fracture): permeability sweep", md)
     print(md)

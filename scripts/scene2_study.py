@@ -26,10 +26,12 @@ DEFAULT = "h10"
 CASES = {
     "h10": ("default: layered mesh, fracture 10 m, wells 5 m, first layer 0.5 m", []),
     "h20": ("fracture 20 m, wells 10 m", ["-thm_scene2_fracture_size", "20", "-thm_scene2_well_size", "10"]),
-    "thin": ("first layer 0.25 m growing by 1.3", ["-thm_scene2_layer", "0.25", "-thm_scene2_layer_growth", "1.3"]),
+    "thin": ("first layer 0.25 m growing by 1.3",
+             ["-thm_scene2_layer", "0.25", "-thm_scene2_layer_growth", "1.3"]),
     "tet": ("isotropic tetrahedra (no layers)", ["-thm_scene2_layer", "0"]),
     "box5": ("domain 5 R", ["-thm_scene2_box", "5"]),
-    "nusselt": ("wall exchange hw = Nu lambda_f / (2 a), local a", ["-thm_fracture_heat_exchange", "nusselt"]),
+    "nusselt": ("wall exchange hw = Nu lambda_f / (2 a), local a",
+                ["-thm_fracture_heat_exchange", "nusselt"]),
     "dt": ("steps x1.1 up to 5e6 s", ["-thm_dt_growth", "1.1", "-thm_dt_max", "5e6"]),
     "tip0": ("lam = 0 at the front", ["-thm_scene2_tip_traction", "zero"]),
 }
@@ -37,7 +39,8 @@ PAPER = {"lam_injector": 30e6, "aperture_injector": 0.3e-3}
 
 
 def run(out, name, extra):
-    run_petthm("penny_impermeable", os.path.join(out, "runs", name), "-options_file", OPTS, *CASES[name][1], *extra)
+    run_petthm("penny_impermeable", os.path.join(out, "runs", name), "-options_file", OPTS, *CASES[name][1],
+               *extra)
     print(f"{name}: done", flush=True)
 
 
@@ -50,7 +53,8 @@ def row(name, d):
             "lam_error": round(h["lam_injector"][-1] / PAPER["lam_injector"] - 1, 3),
             "aperture_injector_mm": round(h["aperture_injector"][-1] * 1e3, 4),
             "aperture_error": round(h["aperture_injector"][-1] / PAPER["aperture_injector"] - 1, 3),
-            "lam_injector_1e5_MPa": round(float(np.interp(5.0, np.log10(h["time"]), h["lam_injector"])) / 1e6, 2),
+            "lam_injector_1e5_MPa": round(float(np.interp(5.0, np.log10(h["time"]),
+                                                          h["lam_injector"])) / 1e6, 2),
             "p_inj_peak_time": float(f"{h['time'][k]:.2g}"),
             "p_inj_rise_MPa": round((p[k] - p[0]) / 1e6, 3), "p_inj_fall_MPa": round((p[k] - p[-1]) / 1e6, 3),
             "T_prod_1e9": round(float(h["production_temperature"][-1]), 2),
@@ -99,7 +103,8 @@ def fig5(out, name):
         y = np.concatenate([xy[:, 1], -xy[:, 1]])
         keep = np.unique(np.round(np.column_stack([x, y]), 9), axis=0, return_index=True)[1]
         return x[keep], y[keep], np.concatenate([val, val])[keep]
-    panels = [(T[:, :2], T[:, 2], "Tf (degC)", "coolwarm"), (v[:, :2], v[:, 4] * 1e3, "aperture (mm)", "viridis"),
+    panels = [(T[:, :2], T[:, 2], "Tf (degC)", "coolwarm"),
+              (v[:, :2], v[:, 4] * 1e3, "aperture (mm)", "viridis"),
               (v[:, :2], v[:, 3] / 1e6, "contact traction lam (MPa)", "magma")]
     for ax, (xy, val, title, cmap) in zip(axs, panels):
         x, y, c = mirrored(xy, val)
@@ -145,9 +150,11 @@ def main():
                    ("p_inj peak at (s)", "p_inj_peak_time", ".1e"), ("rise (MPa)", "p_inj_rise_MPa", ""),
                    ("fall after peak (MPa)", "p_inj_fall_MPa", ""), ("T_prod 1e9 s (degC)", "T_prod_1e9", ""),
                    ("a(lam) identity", "aperture_identity", ".1e"), ("mass bal.", "mass_balance_max", ".1e"),
-                   ("energy bal.", "energy_balance_max", ".1e"), ("Tf bound viol.", "Tf_bounds_violation", ".1e"),
+                   ("energy bal.", "energy_balance_max", ".1e"),
+                   ("Tf bound viol.", "Tf_bounds_violation", ".1e"),
                    ("steps", "steps", ""), ("Newton", "newton", ""), ("wall (s)", "wall_s", "")], rows)
-    write_markdown(os.path.join(a.out, "scene2.md"), "Scene 2 (penny_impermeable): targets and sensitivity", md)
+    write_markdown(os.path.join(a.out, "scene2.md"), "Scene 2 (penny_impermeable): targets and sensitivity",
+                   md)
     print(md)
 
 

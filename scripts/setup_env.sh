@@ -24,7 +24,7 @@ PY
 }
 
 if [ -x "$VENV/bin/python" ] && has_petsc4py "$VENV/bin/python" \
-   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, pytest, mpi4py" 2>/dev/null; then
+   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, pytest, mpi4py, ruff" 2>/dev/null; then
   exit 0
 fi
 
@@ -47,7 +47,7 @@ else
 fi
 PIP="$VENV/bin/python -m pip"
 need=""
-for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy pytest:pytest mpi4py:mpi4py; do
+for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy pytest:pytest mpi4py:mpi4py ruff:ruff; do
   "$VENV/bin/python" -c "import ${mod%%:*}" 2>/dev/null || need="$need ${mod#*:}"
 done
 [ -z "$need" ] || $PIP install -q $need

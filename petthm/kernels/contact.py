@@ -38,7 +38,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ..model import CellJacobian, CellResidual
+from ..model import FRACTURE, CellJacobian, CellResidual, Region, Side, Trace
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,11 @@ class FractureMechanics:
     pressure: Optional[Callable] = None        # a prescribed pf(x, t) (SI), x (nc, nq, d)
     insitu_normal_stress: float = 0.0          # sigma0_nn, tension positive
     gap_tolerance: float = 0.0                 # m, see ``_gap_f0``
-    region: str = "fracture"
+    region: Region = FRACTURE
+
+    def trace(self, side: Side) -> Trace:
+        """The displacement on one face."""
+        return Trace(self.u, side)
 
 
 @dataclass(frozen=True)
@@ -73,15 +77,10 @@ class JointLaw:
         return self.closure_aperture(lam)[0] + np.maximum(g, 0.0)
 
 
-def normals(ctx):
-    """Unit normal of each fracture face (nc, 1, d), from the - to the + face."""
-    return ctx._asm.mesh.normals[ctx._cells][:, None, :]
-
-
 def opening(fm: FractureMechanics, ctx):
     """Normal opening g = (u+ - u-) . n at the quadrature points (nc, nq)."""
-    jump = ctx.value(fm.u + "+") - ctx.value(fm.u + "-")
-    return np.einsum("cqa,cqa->cq", jump, np.broadcast_to(normals(ctx), jump.shape))
+    jump = ctx.value(fm.trace(Side.PLUS)) - ctx.value(fm.trace(Side.MINUS))
+    return np.einsum("cqa,cqa->cq", jump, np.broadcast_to(ctx.normals, jump.shape))
 
 
 def net_pressure(fm: FractureMechanics, ctx):
@@ -98,12 +97,12 @@ def net_pressure(fm: FractureMechanics, ctx):
 
 def _face_load(fm: FractureMechanics, sign: float, ctx):
     """-sign P n: the load on the + (sign = 1) or - (sign = -1) face's rock."""
-    return -sign * net_pressure(fm, ctx)[..., None] * normals(ctx)
+    return -sign * net_pressure(fm, ctx)[..., None] * ctx.normals
 
 
 def _load_g0(sign: float, ctx):
     """d(face load)/d(pf or lam): -sign n (nc, 1, d, 1)."""
-    return (-sign * normals(ctx))[..., None]
+    return (-sign * ctx.normals)[..., None]
 
 
 def _gap_f0(fm: FractureMechanics, ctx):
@@ -118,21 +117,26 @@ def _gap_f0(fm: FractureMechanics, ctx):
 
 def _gap_g0(sign: float, ctx):
     """d g / d u+- = +-n (nc, 1, 1, d)."""
-    return (sign * normals(ctx))[:, :, None, :]
+    return (sign * ctx.normals)[:, :, None, :]
+
+
+#: the faces in the order their terms are registered
+SIDES = (Side.PLUS, Side.MINUS)
 
 
 def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
     """Face loads on u+ and u-, and the contact rows of ``lam``."""
     res, jac = [], []
-    for side, sign in (("+", 1.0), ("-", -1.0)):
-        res.append(CellResidual(fm.u + side, partial(_face_load, fm, sign), None, region=fm.region))
+    for side in SIDES:
+        u = fm.trace(side)
+        res.append(CellResidual(u, partial(_face_load, fm, side.sign), None, region=fm.region))
         for q in (fm.pf, fm.lam):
             if q is not None:
-                jac.append(CellJacobian(fm.u + side, q, g0=partial(_load_g0, sign), region=fm.region))
+                jac.append(CellJacobian(u, q, g0=partial(_load_g0, side.sign), region=fm.region))
     if fm.lam is not None:
         res.append(CellResidual(fm.lam, partial(_gap_f0, fm), None, region=fm.region))
-        for side, sign in (("+", 1.0), ("-", -1.0)):
-            jac.append(CellJacobian(fm.lam, fm.u + side, g0=partial(_gap_g0, sign), region=fm.region))
+        for side in SIDES:
+            jac.append(CellJacobian(fm.lam, fm.trace(side), g0=partial(_gap_g0, side.sign), region=fm.region))
     return res, jac
 
 
@@ -149,7 +153,7 @@ class ApertureState:
 @dataclass(frozen=True)
 class Aperture:
     """a(lam, g) = ac(lam) + max(g, 0) of a fracture with contact: the
-    aperture that ``transport.Flow`` and ``transport.Heat`` multiply their
+    aperture that ``flow.Flow`` and ``heat.Heat`` multiply their
     per-unit-aperture coefficients by (storage a c_f, a beta_f, permeability
     a^3/12, capacity a rho_f C_f, conductivity a lambda_f).  da/dt is the chain
     rule ac'(lam) dlam/dt + H(g) dg/dt, exact for any time integrator away from
@@ -158,19 +162,20 @@ class Aperture:
     law: JointLaw
 
     def state(self, ctx) -> ApertureState:
-        key = ("aperture", id(self))
-        if key not in ctx._cache:
-            m = self.mech
-            lam = ctx.value(m.lam)[..., 0]
-            g = opening(m, ctx)
-            ac, dac = self.law.closure_aperture(lam)
-            H = (g > 0).astype(float)
-            n = np.broadcast_to(normals(ctx), ctx.value(m.u + "+").shape)
-            gdot = np.einsum("cqa,cqa->cq", ctx.dot(m.u + "+") - ctx.dot(m.u + "-"), n)
-            ctx._cache[key] = ApertureState(ac + H * g, dac, H, dac * ctx.dot(m.lam)[..., 0] + H * gdot)
-        return ctx._cache[key]
+        return ctx.cached(("aperture", id(self)), lambda: self._state(ctx))
 
-    def jacobians(self, test: str, s0: Callable, s1: Optional[Callable], region: Optional[str] = None) -> list:
+    def _state(self, ctx) -> ApertureState:
+        m = self.mech
+        lam = ctx.value(m.lam)[..., 0]
+        g = opening(m, ctx)
+        ac, dac = self.law.closure_aperture(lam)
+        H = (g > 0).astype(float)
+        up, um = m.trace(Side.PLUS), m.trace(Side.MINUS)
+        n = np.broadcast_to(ctx.normals, ctx.value(up).shape)
+        gdot = np.einsum("cqa,cqa->cq", ctx.dot(up) - ctx.dot(um), n)
+        return ApertureState(ac + H * g, dac, H, dac * ctx.dot(m.lam)[..., 0] + H * gdot)
+
+    def jacobians(self, test, s0: Callable, s1: Optional[Callable], region: Optional[Region] = None) -> list:
         """Blocks d(residual of ``test``)/d(lam, u+, u-) through the aperture.
 
         ``s0(ctx)`` (nc, nq) and ``s1(ctx)`` (nc, nq, d) are the derivatives of
@@ -187,15 +192,15 @@ class Aperture:
             return (self.state(ctx).dlam[..., None] * s1(ctx))[:, :, None, :, None]
 
         def g0_u(sign, ctx):
-            return (sign * self.state(ctx).H * s0(ctx))[..., None, None] * normals(ctx)[:, :, None, :]
+            return (sign * self.state(ctx).H * s0(ctx))[..., None, None] * ctx.normals[:, :, None, :]
 
         def g2_u(sign, ctx):
             return sign * (self.state(ctx).H[..., None] * s1(ctx))[:, :, None, :, None] * \
-                normals(ctx)[:, :, None, None, :]
+                ctx.normals[:, :, None, None, :]
         has1 = s1 is not None
         region = region or m.region
         out = [CellJacobian(test, m.lam, g0=g0_lam, g2=g2_lam if has1 else None, region=region)]
-        for side, sign in (("+", 1.0), ("-", -1.0)):
-            out.append(CellJacobian(test, m.u + side, g0=partial(g0_u, sign),
-                                    g2=partial(g2_u, sign) if has1 else None, region=region))
+        for side in SIDES:
+            out.append(CellJacobian(test, m.trace(side), g0=partial(g0_u, side.sign),
+                                    g2=partial(g2_u, side.sign) if has1 else None, region=region))
         return out

@@ -1,121 +1,325 @@
-"""Matrix heat transport: physics.md section 6 without the pressure/strain terms.
+"""Heat transport on one region (matrix cells or fracture faces): physics.md
+sections 6 and 7, and the wall exchange between fracture and rock.
 
-Strong form (T in K, SI units)::
+In conservative form with the fluid's enthalpy flux b T, b = rho_f C_f q
+(q the Darcy flux of ``kernels/flow.Flow``, or a prescribed velocity), for
+the unknown T::
 
-    (rho C)m dT/dt + rho_f C_f v . grad T - div(lambda_m grad T) = s      in Omega
-    T = T_D on Gamma_D;  -lambda grad T . n = -q_N on Gamma_N (q_N inflow);
-    -lambda grad T . n = h (T - T_ext) on Gamma_R
+    C dT/dt + div(b T - L grad T) = 0
 
-Weak form with SUPG (Brooks & Hughes 1982), residual R of the strong form and
-advective velocity w = rho_f C_f v / (rho C)m::
+Matrix: C = (rho C)_m, L = lambda_m.  Fracture: C = a rho_f C_f,
+L = a lambda_f (a deformable fracture: the stored energy's rate gains
+C T da/dt), and grad is the tangential gradient.  Weak form::
 
-    int v (rho C Tdot + rho_f C_f v.grad T - s) + grad v . lambda grad T
-      + sum_e int tau (w . grad v) R  - int_N v q_N + int_R v h (T - T_ext) = 0
+    int w C Tdot - grad w . (b T - L grad T) + sum_e int tau (b . grad w) R
 
-tau = (  (2|w|/h_p)^2 + 9 (4 kappa / h_p^2)^2 )^(-1/2), kappa = lambda/(rho C),
-h_p = h/p (cell size over element degree).  For P2 the Laplacian in R is
-kept (consistent SUPG); for P1 it vanishes.
+The conservative heat form makes the discrete energy balance exact: with
+w = 1 every flux term cancels, so the stored-energy change equals the
+enthalpy brought in by wells and boundaries (physics.md section 7).  It
+differs from the advective form of section 7 by T (S pdot - B Tdot), the
+fluid's storage rate times T, which vanishes for an incompressible fluid.
+Where the fluid leaves through a boundary without a temperature condition
+it carries its enthalpy out (``outflow_term``).
+SUPG (Brooks & Hughes 1982) uses the residual of the advective form,
+R = C Tdot + b . grad T - L lap T (- s),
+tau = ((2|b|/h_p)^2 + 9 (4 L/h_p^2)^2)^(-1/2), h_p = h/p.  The fracture's
+wall exchange hw (T - Tm) is left out of R: it is a coupling to the rock,
+and where it dominates (hw = Nu lambda_f / (2a) is about 1e4 W/m2/K, the
+Damkoehler number hw h / |b| is 1e2-1e3) its SUPG term
+tau (b . grad w) hw (T - Tm) has off-diagonal entries of the size of the
+exchange itself and no sign, and Tf left [Tinj, T0] by 12-19 % in Scene 2.
+Without it the scheme is streamline upwinding of the advection-conduction
+operator with the (lumped) exchange as a source: Tf stays in the bounds,
+at the price of consistency O(tau hw (T - Tm)) in the exchange layer,
+which no mesh resolves there (its thickness rho_f C_f q / hw is a few mm).
+With w = 1 the SUPG term vanishes, so it does not disturb the balance.
+Every Jacobian block is exact (tests check them against finite
+differences with a negative control).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import partial
 from typing import Callable, Optional
 
 import numpy as np
 
-from ..model import CellJacobian, CellResidual, FacetTerm, Model
-from ..fields import FieldSpec
+from ..model import CellJacobian, CellResidual, Domain, FacetTerm, Region
+from .flow import Flow, aperture_state, g0_block, mobility, permeability_grad_p, unit_darcy
 
-#: f(x (nc,nq,d), t) -> array broadcastable to the quadrature points
+#: f(x (nc, nq, d), t) -> array broadcastable to the quadrature points
 PointFunction = Callable[[np.ndarray, float], np.ndarray]
 
 
 @dataclass(frozen=True)
-class HeatCoefficients:
-    rho_c: float                      # (rho C)m, J/(m3 K)
-    conductivity: float               # lambda_m, W/(m K)
-    fluid_rho_c: float = 0.0          # rho_f C_f, J/(m3 K)
-    velocity: Optional[PointFunction] = None   # Darcy velocity v, m/s
-    source: Optional[PointFunction] = None     # s, W/m3
-    supg: bool = True
+class Heat:
+    """Heat-transport coefficients of one region.  With an ``aperture`` the
+    capacity and conductivity are per unit aperture (C = a capacity,
+    L = a conductivity) and the stored energy's rate gains capacity T da/dt.
+    Heat is advected by the Darcy flux of ``flow`` or by a prescribed Darcy
+    ``velocity`` v(x, t) (then b = rho_f C_f v, which must be divergence-free
+    for the energy balance); ``source`` s(x, t) (W/m3) is added to the right
+    side (-int w s, and -s in the SUPG residual R).  With a prescribed
+    velocity the enthalpy flux is written b (T - T_ref): the same discrete
+    equations (int grad w . b T_ref cancels against the outflow term's
+    T_ref part for a divergence-free b with the temperature prescribed
+    where the fluid enters), without the round-off of b T in kelvin that
+    floors the residual of a field varying by far less than T."""
+    region: Domain
+    T: str
+    capacity: float                 # C
+    conductivity: object            # L: a number, or a (d, d) tensor (no advection then)
+    fluid_rho_c: float = 0.0        # rho_f C_f (0: no advection)
+    flow: Optional[Flow] = None     # the flow that advects heat, or
+    velocity: Optional[PointFunction] = None   # a prescribed Darcy velocity (m/s)
+    source: Optional[PointFunction] = None     # W/m3
+    reference_temperature: float = 0.0         # T_ref of the enthalpy flux b (T - T_ref), see below
     degree: int = 2
+    supg: bool = True
+    aperture: Optional[object] = None
+    lumped: bool = False            # capacity term by row-sum lumping (P1, no aperture)
+
+    @property
+    def advects(self) -> bool:
+        return (self.flow is not None or self.velocity is not None) and self.fluid_rho_c != 0.0
 
 
-def _velocity(c: HeatCoefficients, ctx):
-    if c.velocity is None or c.fluid_rho_c == 0.0:
-        return None
-    return np.broadcast_to(c.velocity(ctx.x, ctx.t), ctx.shape + (ctx.dim,))
+@dataclass(frozen=True)
+class ApertureExchange:
+    """Wall heat-transfer coefficient hw = K / a of a deformable fracture
+    (physics.md section 7: K = Nu lambda_f / 2)."""
+    K: float
+    aperture: object
+
+    def value(self, ctx):
+        return self.K / self.aperture.state(ctx).a
+
+    def derivative(self, ctx):
+        """d hw / d a."""
+        return -self.K / self.aperture.state(ctx).a ** 2
 
 
-def _tau(c: HeatCoefficients, ctx, v):
-    """SUPG parameter (nc, nq) and advective velocity w (nc, nq, d)."""
-    w = (c.fluid_rho_c / c.rho_c) * v
-    hp = ctx.h / c.degree
-    kappa = c.conductivity / c.rho_c
-    wn = np.linalg.norm(w, axis=-1)
-    return 1.0 / np.sqrt((2.0 * wn / hp) ** 2 + 9.0 * (4.0 * kappa / hp ** 2) ** 2), w
+def _hw(hw, ctx):
+    """A wall coefficient: a number, or per point (``ApertureExchange``)."""
+    return hw.value(ctx) if isinstance(hw, ApertureExchange) else hw
 
 
-def _strong_residual(c, ctx, v, name):
-    r = c.rho_c * ctx.dot(name)[..., 0] - c.conductivity * ctx.lap(name)[..., 0]
-    if v is not None:
-        r = r + c.fluid_rho_c * np.einsum("cqa,cqa->cq", v, ctx.grad(name)[:, :, 0, :])
-    if c.source is not None:
-        r = r - np.broadcast_to(c.source(ctx.x, ctx.t), r.shape)
-    return r
+# -- heat -------------------------------------------------------------------------
+class _HeatPoint:
+    """Everything the heat residual and its derivatives need at the quadrature
+    points (computed once per batch of cells: ``heat_point``)."""
+
+    def __init__(self, h: Heat, ctx):
+        self.h = h
+        T = h.T
+        self.gT = ctx.grad(T)[:, :, 0, :]                           # (nc, nq, d)
+        self.Tv = ctx.value(T)[..., 0]
+        self.ap = aperture_state(h, ctx)
+        a = 1.0 if self.ap is None else self.ap.a
+        self.C, self.L = h.capacity * a, h.conductivity * a         # numbers or (nc, nq)
+        self.advect = h.advects
+        d = ctx.dim
+        if self.advect:
+            if h.flow is not None:
+                M, dM = mobility(h.flow, ctx)
+                self.M, self.dM = M, dM
+                self.b = -h.fluid_rho_c * M[..., None] * permeability_grad_p(h.flow, ctx)     # (nc, nq, d)
+                # m = (db/dT)/b componentwise factor: b depends on T through M(T)
+                self.m = dM / M if h.flow.T == T else np.zeros_like(M)
+            else:
+                self.b = h.fluid_rho_c * np.broadcast_to(h.velocity(ctx.x, ctx.t), ctx.shape + (d,))
+                self.m = np.zeros(ctx.shape)
+            hp = ctx.h / h.degree
+            self.A = 4.0 / hp ** 2
+            self.B1 = 144.0 / hp ** 4                                      # B0 = B1 L^2
+            bb = np.einsum("cqa,cqa->cq", self.b, self.b)
+            self.tau = 1.0 / np.sqrt(self.A * bb + self.B1 * self.L ** 2) if h.supg else np.zeros_like(bb)
+            R = self.C * ctx.dot(T)[..., 0] + np.einsum("cqa,cqa->cq", self.b, self.gT)
+            if h.degree > 1:
+                self.lapT = ctx.lap(T)[..., 0]
+                R = R - self.L * self.lapT
+            if h.source is not None:
+                R = R - np.broadcast_to(h.source(ctx.x, ctx.t), R.shape)
+            self.R = R
+        self.d = d
+
+    def dZ_db(self):
+        """dZ_a/db_c of Z = tau R b: (nc, nq, a, c)."""
+        tau, R, b = self.tau, self.R, self.b
+        eye = np.eye(self.d)[None, None]
+        return (-(tau ** 3 * self.A * R)[..., None, None] * b[..., :, None] * b[..., None, :]
+                + tau[..., None, None] * b[..., :, None] * self.gT[..., None, :]
+                + (tau * R)[..., None, None] * eye)
 
 
-def f0_T(c: HeatCoefficients, name: str, ctx):
-    r = c.rho_c * ctx.dot(name)[..., 0]
-    v = _velocity(c, ctx)
-    if v is not None:
-        r = r + c.fluid_rho_c * np.einsum("cqa,cqa->cq", v, ctx.grad(name)[:, :, 0, :])
-    if c.source is not None:
-        r = r - np.broadcast_to(c.source(ctx.x, ctx.t), r.shape)
+def heat_point(h: Heat, ctx) -> _HeatPoint:
+    return ctx.cached(("heat", id(h)), lambda: _HeatPoint(h, ctx))
+
+
+def _conduction(hp: _HeatPoint, gT):
+    L = hp.L
+    if hp.ap is not None:                                            # per point (deformable fracture)
+        return L[..., None] * gT
+    return L * gT if np.isscalar(L) else np.einsum("ab,cqb->cqa", L, gT)
+
+
+def heat_f0_capacity(h: Heat, ctx):
+    """C dT/dt alone (the lumped capacity term)."""
+    return (h.capacity * ctx.dot(h.T)[..., 0])[..., None]
+
+
+def heat_f0(h: Heat, ctx):
+    ap = aperture_state(h, ctx)
+    if h.lumped:
+        r = np.zeros(ctx.shape)
+    elif ap is None:
+        r = h.capacity * ctx.dot(h.T)[..., 0]
+    else:
+        r = h.capacity * (ap.a * ctx.dot(h.T)[..., 0] + ctx.value(h.T)[..., 0] * ap.adot)
+    if h.source is not None:
+        r = r - np.broadcast_to(h.source(ctx.x, ctx.t), ctx.shape)
     return r[..., None]
 
 
-def f1_T(c: HeatCoefficients, name: str, ctx):
-    f1 = c.conductivity * ctx.grad(name)
-    v = _velocity(c, ctx)
-    if c.supg and v is not None:
-        tau, w = _tau(c, ctx, v)
-        f1 = f1 + (tau * _strong_residual(c, ctx, v, name))[:, :, None, None] * w[:, :, None, :]
-    return f1
+def heat_f1(h: Heat, ctx):
+    hp = heat_point(h, ctx)
+    f1 = _conduction(hp, hp.gT)
+    if hp.advect:
+        f1 = f1 - hp.b * (hp.Tv - h.reference_temperature)[..., None]
+        if h.supg:
+            f1 = f1 + (hp.tau * hp.R)[..., None] * hp.b
+    return f1[:, :, None, :]
 
 
-def g0_TT(c, name, ctx):
-    return np.full((1, 1, 1, 1), c.rho_c * ctx.shift)     # constant over the cell
+def heat_g0_TT(h: Heat, ctx):
+    ap = aperture_state(h, ctx)
+    if ap is None:
+        return g0_block(h.capacity * ctx.shift)
+    return g0_block(h.capacity * (ap.a * ctx.shift + ap.adot))
 
 
-def g1_TT(c, name, ctx):
-    v = _velocity(c, ctx)
-    return (c.fluid_rho_c * v)[:, :, None, None, :]
+def heat_g2_TT(h: Heat, ctx):
+    hp = heat_point(h, ctx)
+    b, m = hp.b, hp.m[..., None]
+    g = -b * (1.0 + hp.Tv[..., None] * m)                   # d(-b T)/dT
+    if h.supg:
+        g = g + (hp.tau * hp.C * ctx.shift)[..., None] * b
+        g = g + np.einsum("nqac,nqc->nqa", hp.dZ_db(), b * m)
+    return g[:, :, None, :, None]
 
 
-def g2_TT(c, name, ctx):
-    tau, w = _tau(c, ctx, _velocity(c, ctx))
-    return (tau[:, :, None] * w * c.rho_c * ctx.shift)[:, :, None, :, None]
-
-
-def g2lap_TT(c, name, ctx):
-    tau, w = _tau(c, ctx, _velocity(c, ctx))
-    return (-c.conductivity * tau[:, :, None] * w)[:, :, None, :, None]
-
-
-def g3_TT(c, name, ctx):
+def heat_g3_TT(h: Heat, ctx):
     d = ctx.dim
-    g = (c.conductivity * np.eye(d))[None, None]                # constant over the cell
-    v = _velocity(c, ctx)
-    if c.supg and v is not None:
-        tau, w = _tau(c, ctx, v)
-        g = g + tau[:, :, None, None] * w[:, :, :, None] * (c.fluid_rho_c * v)[:, :, None, :]
+    hp = heat_point(h, ctx) if (h.supg or h.aperture is not None) else None
+    L = h.conductivity if hp is None else hp.L
+    if h.aperture is not None:                                       # per point (deformable fracture)
+        g = L[..., None, None] * np.eye(d)
+    else:
+        g = (L * np.eye(d) if np.isscalar(L) else np.asarray(L))[None, None]
+    if h.supg:
+        g = g + hp.tau[..., None, None] * hp.b[..., :, None] * hp.b[..., None, :]
     return g[:, :, None, :, None, :]
 
 
-# -- boundary terms ----------------------------------------------------------
+def heat_g2lap_TT(h: Heat, ctx):
+    hp = heat_point(h, ctx)
+    return ((-hp.L * hp.tau)[..., None] * hp.b)[:, :, None, :, None]
+
+
+def heat_g3_Tp(h: Heat, ctx):
+    """d f1/d grad p = (-T I + dZ/db) db/dgrad p, db/dgrad p = -rho_f C_f M K."""
+    hp = heat_point(h, ctx)
+    coef = hp.M if hp.ap is None else hp.M * hp.ap.a ** 3
+    dbdg = -h.fluid_rho_c * coef[..., None, None] * h.flow.permeability[None, None]
+    D = -hp.Tv[..., None, None] * np.eye(hp.d)[None, None]
+    if h.supg:
+        D = D + hp.dZ_db()
+    return np.einsum("nqac,nqce->nqae", D, dbdg)[:, :, None, :, None, :]
+
+
+def heat_s0_aperture(h: Heat, ctx):
+    """d f0/d a (with da/dt): capacity (Tdot + T shift)."""
+    return h.capacity * (ctx.dot(h.T)[..., 0] + ctx.value(h.T)[..., 0] * ctx.shift)
+
+
+def heat_s1_aperture(h: Heat, ctx):
+    """d f1/d a: conductivity grad T - (db/da) T + d(tau R b)/da, db/da = 3 b / a
+    (computed as -rho_f C_f M 3 a^2 K_unit grad p), with
+    dR/da = capacity Tdot + db/da . grad T - conductivity lap T and
+    dtau/da = -tau^3 (A b . db/da + B1 L conductivity)."""
+    hp = heat_point(h, ctx)
+    s = h.conductivity * hp.gT
+    if hp.advect:
+        db = -h.fluid_rho_c * (3 * hp.ap.a ** 2 * hp.M)[..., None] * unit_darcy(h.flow, ctx)
+        s = s - db * hp.Tv[..., None]
+        if h.supg:
+            dR = h.capacity * ctx.dot(h.T)[..., 0] + np.einsum("cqa,cqa->cq", db, hp.gT)
+            if h.degree > 1:
+                dR = dR - h.conductivity * hp.lapT
+            dtau = -hp.tau ** 3 * (hp.A * np.einsum("cqa,cqa->cq", hp.b, db) + hp.B1 * hp.L * h.conductivity)
+            s = s + (dtau * hp.R + hp.tau * dR)[..., None] * hp.b + (hp.tau * hp.R)[..., None] * db
+    return s
+
+
+def _check_heat(h: Heat) -> None:
+    if h.flow is not None and h.velocity is not None:
+        raise ValueError("heat is advected by a flow or by a prescribed velocity, not both")
+    if h.reference_temperature and h.velocity is None:
+        raise ValueError("a reference temperature only with a prescribed (divergence-free) velocity")
+    if h.advects and not np.isscalar(h.conductivity):
+        raise ValueError("a conductivity tensor is only supported without advection")
+    if h.aperture is not None and (not np.isscalar(h.conductivity) or h.velocity is not None):
+        raise ValueError("a deformable fracture takes a scalar conductivity and the flow's velocity")
+    if h.lumped and (h.aperture is not None or h.degree != 1):
+        raise ValueError("a lumped capacity needs P1 and a fixed aperture")
+
+
+def heat_terms(h: Heat) -> tuple[list, list]:
+    _check_heat(h)
+    advect = h.advects
+    supg = advect and h.supg
+    hh = h if advect else replace(h, fluid_rho_c=0.0, flow=None, velocity=None, supg=False)
+    region, lumped = Region(h.region), Region(h.region, lumped=True)
+    res = [CellResidual(h.T, partial(heat_f0, hh), partial(heat_f1, hh), region=region)]
+    if h.lumped:
+        res.append(CellResidual(h.T, partial(heat_f0_capacity, hh), None, region=lumped))
+        jac = [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh), region=lumped)]
+    else:
+        jac = []
+    jac += [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh) if h.capacity and not h.lumped else None,
+                        g2=partial(heat_g2_TT, hh) if advect else None,
+                        g3=partial(heat_g3_TT, hh),
+                        g2_lap=partial(heat_g2lap_TT, hh) if supg and h.degree > 1 else None,
+                        region=region)]
+    if advect and h.flow is not None:
+        jac.append(CellJacobian(h.T, h.flow.p, g3=partial(heat_g3_Tp, hh), region=region))
+    if h.aperture is not None:
+        jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), partial(heat_s1_aperture, hh))
+    return res, jac
+
+
+# -- boundaries of the matrix heat equation ------------------------------------------------
+def outflow_term(h: Heat, boundary: str) -> FacetTerm:
+    """The enthalpy the fluid carries out through a boundary part without a
+    temperature condition: int_out w max(b . n, 0) T (the conservative form's
+    natural condition is zero total flux; a prescribed velocity only)."""
+    if h.velocity is None:
+        raise ValueError("an advective outflow boundary needs a prescribed velocity")
+
+    def bn(ctx):
+        v = np.broadcast_to(h.velocity(ctx.x, ctx.t), ctx.shape + (ctx.dim,))
+        return np.maximum(h.fluid_rho_c * np.einsum("cqa,cqa->cq", v, ctx.n), 0.0)
+
+    def f0(ctx):
+        return bn(ctx)[..., None] * (ctx.value(h.T) - h.reference_temperature)
+
+    def g0(ctx):
+        return bn(ctx)[..., None, None]
+    return FacetTerm(h.T, boundary, f0, g0)
+
+
 def neumann(name: str, boundary: str, inflow: PointFunction) -> FacetTerm:
-    """Prescribed heat inflow q_N (W/m2) through a boundary part."""
+    """Prescribed conductive heat inflow q_N (W/m2) through a boundary part."""
     def f0(ctx):
         return -np.broadcast_to(inflow(ctx.x, ctx.t), ctx.shape)[..., None]
     return FacetTerm(name, boundary, f0, None)
@@ -131,17 +335,43 @@ def robin(name: str, boundary: str, h: float, t_ext: PointFunction) -> FacetTerm
     return FacetTerm(name, boundary, f0, g0)
 
 
-def heat_model(c: HeatCoefficients, name: str = "Tm", facets=()) -> Model:
-    """Registration table of the matrix heat equation for field ``name``."""
-    from functools import partial
-    advect = c.velocity is not None and c.fluid_rho_c != 0.0
-    jac = CellJacobian(
-        name, name,
-        g0=partial(g0_TT, c, name),
-        g1=partial(g1_TT, c, name) if advect else None,
-        g2=partial(g2_TT, c, name) if advect and c.supg else None,
-        g2_lap=partial(g2lap_TT, c, name) if advect and c.supg and c.degree == 2 else None,
-        g3=partial(g3_TT, c, name))
-    return Model(fields=[FieldSpec(name, 1, c.degree)],
-                 residuals=[CellResidual(name, partial(f0_T, c, name), partial(f1_T, c, name))],
-                 jacobians=[jac], facets=list(facets))
+# -- wall heat exchange (fracture region) ----------------------------------------------
+def exchange_terms(Tf: str, walls: tuple, hw, lumped: bool = False) -> tuple[list, list]:
+    """q_h = hw (Tf - Tm_s) on each face s (physics.md section 7): a sink in the
+    fracture heat equation and the equal source in the matrix heat equation
+    (test functions of the ``walls``: the ``Trace`` of Tm on each face).
+    ``hw``: a number, or an ``ApertureExchange`` (hw = K/a with the local
+    aperture; then the blocks with respect to lam and u+- through a as
+    well).  ``lumped``: integrated with the vertex rule (row-sum lumping, P1
+    fields)."""
+    region = Region(Domain.FRACTURE, lumped=lumped)
+
+    def coefficient(ctx):
+        v = _hw(hw, ctx)
+        return v[..., None] if np.ndim(v) else v
+
+    def f0_f(ctx):
+        return coefficient(ctx) * sum(ctx.value(Tf) - ctx.value(s) for s in walls)
+
+    def f0_m(s, ctx):
+        return coefficient(ctx) * (ctx.value(s) - ctx.value(Tf))
+
+    def coef(v, ctx):
+        return g0_block(v * _hw(hw, ctx))
+    res = [CellResidual(Tf, f0_f, None, region=region)]
+    res += [CellResidual(s, partial(f0_m, s), None, region=region) for s in walls]
+    jac = [CellJacobian(Tf, Tf, g0=partial(coef, float(len(walls))), region=region)]
+    for s in walls:
+        jac += [CellJacobian(Tf, s, g0=partial(coef, -1.0), region=region),
+                CellJacobian(s, Tf, g0=partial(coef, -1.0), region=region),
+                CellJacobian(s, s, g0=partial(coef, 1.0), region=region)]
+    if isinstance(hw, ApertureExchange):
+        def s0_f(ctx):
+            return hw.derivative(ctx) * sum(ctx.value(Tf)[..., 0] - ctx.value(s)[..., 0] for s in walls)
+
+        def s0_m(s, ctx):
+            return hw.derivative(ctx) * (ctx.value(s)[..., 0] - ctx.value(Tf)[..., 0])
+        jac += hw.aperture.jacobians(Tf, s0_f, None, region)
+        for s in walls:
+            jac += hw.aperture.jacobians(s, partial(s0_m, s), None, region)
+    return res, jac

@@ -11,7 +11,7 @@ u is the displacement from the in-situ state).  Weak form:
 (F a constant body force, ``Elastic.body_force``: e.g. the rock's weight).
 
 Flow: alpha d(div u)/dt is added to the matrix flow residual (the rest of
-section 5 is ``transport.Flow`` with storage S = 1/M = phi c_f + (alpha - phi)/K_s).
+section 5 is ``flow.Flow`` with storage S = 1/M = phi c_f + (alpha - phi)/K_s).
 In 2D the equations are those of plane strain (the same formulas with d = 2).
 Heat (``heating_terms``): the thermo-mechanical terms of section 6,
 beta_s K T d(div u)/dt - phi beta_f T dp/dt, in the matrix heat equation.
@@ -24,7 +24,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..model import CellJacobian, CellResidual, FacetTerm
+from ..model import MATRIX, CellJacobian, CellResidual, FacetTerm, Region
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class Elastic:
     thermal_expansion: float = 0.0    # volumetric beta_s
     T_ref: float = 0.0
     body_force: tuple = ()            # F (N/m3), constant: -div sigma = F
-    region: str = "matrix"
+    region: Region = MATRIX
 
     @property
     def shear(self) -> float:
@@ -95,15 +95,8 @@ def _biot_f0(el: Elastic, ctx):
 
 
 def _grad_dot(ctx, name):
-    """Gradient of the time derivative of a vector field (nc, nq, m, d)."""
-    key = ("gd", name)
-    if key not in ctx._cache:
-        from ..assembly import physical_gradient
-        tab = ctx._asm.tab(name)
-        X = ctx._nodal(name, dot=True)
-        nc, nq, r = X.shape[0], tab.phi.shape[0], ctx.Jinv.shape[1]
-        ctx._cache[key] = physical_gradient((tab.D @ X).reshape(nc, nq, r, -1), ctx.Jinv)
-    return ctx._cache[key]
+    """Gradient of the time derivative of a field (nc, nq, m, d)."""
+    return ctx.grad_dot(name)
 
 
 def _biot_g1(el: Elastic, ctx):
@@ -125,7 +118,8 @@ def elastic_terms(el: Elastic) -> tuple[list, list]:
     return res, jac
 
 
-def heating_terms(el: Elastic, T: str, p: Optional[str] = None, porosity_expansion: float = 0.0) -> tuple[list, list]:
+def heating_terms(el: Elastic, T: str, p: Optional[str] = None,
+                  porosity_expansion: float = 0.0) -> tuple[list, list]:
     """Thermo-mechanical heating of physics.md section 6 in the heat equation of ``T``:
 
         + beta_s K T d(div u)/dt - phi beta_f T dp/dt
@@ -149,7 +143,8 @@ def heating_terms(el: Elastic, T: str, p: Optional[str] = None, porosity_expansi
         return rate(ctx)[..., None, None]
 
     def g1_Tu(ctx):
-        return (bK * ctx.shift * ctx.value(T)[..., 0])[..., None, None, None] * np.eye(el.dim)[None, None, None]
+        return (bK * ctx.shift * ctx.value(T)[..., 0])[..., None, None,
+                                                       None] * np.eye(el.dim)[None, None, None]
 
     def g0_Tp(ctx):
         return (-pe * ctx.shift * ctx.value(T)[..., 0])[..., None, None]

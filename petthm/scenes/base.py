@@ -1,15 +1,28 @@
-"""What a scene is: geometry and mesh, active fields and model, boundary and
-initial conditions, time window, monitors and reference solution."""
+"""What a scene is: a short declaration of geometry and mesh, parameters,
+the builders of its physics, boundary and initial conditions, time window,
+monitors and reference solution.
+
+A scene class declares its name, description, parameter groups
+(``parameters``: ``materials.group`` selections and its own dataclasses of
+``-thm_<scene>_*`` options), time defaults and history columns.  An
+instance holds the run options and the merged parameter object ``p``; its
+``build(mesh, degree)`` returns a ``Setup``: the model (made with
+``builders.ModelBuilder``), the Dirichlet conditions, the unknown scales,
+the initial state and the ``Monitor`` that observes the run.  The run's
+state (errors so far, last values) lives in that monitor, not in the scene.
+"""
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
 from .. import params as P
-from ..params import param
+from ..assembly import FieldScale
+from ..constraints import Dirichlet
+from ..materials import Parameters
+from ..model import Model
 
 
 @dataclass(frozen=True)
@@ -22,67 +35,74 @@ class TimeDefaults:
     mesh_size: float = 0.1
 
 
-@dataclass(frozen=True)
-class HeatMaterial:
-    """Rock and fluid thermal properties (physics.md section 6)"""
-    rock_density: float = param(2650.0, "kg/m3", "rock density rho_s", lo=0.0, lo_open=True)
-    rock_heat_capacity: float = param(800.0, "J/(kg K)", "rock heat capacity C_s", lo=0.0, lo_open=True)
-    rock_conductivity: float = param(2.9, "W/(m K)", "rock thermal conductivity lambda_s", lo=0.0, lo_open=True)
-    rock_porosity: float = param(0.0, "-", "porosity phi", lo=0.0, hi=1.0)
-    fluid_density: float = param(1000.0, "kg/m3", "fluid density rho_f", lo=0.0, lo_open=True)
-    fluid_heat_capacity: float = param(4200.0, "J/(kg K)", "fluid heat capacity C_f", lo=0.0, lo_open=True)
-    fluid_conductivity: float = param(0.6, "W/(m K)", "fluid thermal conductivity lambda_f", lo=0.0)
+class Monitor:
+    """Observes a run: ``__call__(problem, t, X)`` after every accepted step
+    (and for the initial state) returns the history row's scene columns;
+    ``report(problem, t)`` the scene's part of summary.json.  Subclasses keep
+    the run's state (worst errors, samples at given times) as attributes
+    created in their ``__init__``."""
 
-    @property
-    def rho_c(self) -> float:
-        """(rho C)m = (1 - phi) rho_s C_s + phi rho_f C_f."""
-        phi = self.rock_porosity
-        return (1 - phi) * self.rock_density * self.rock_heat_capacity + \
-            phi * self.fluid_density * self.fluid_heat_capacity
+    def __call__(self, problem, t: float, X=None) -> dict:
+        return {}
 
-    @property
-    def conductivity(self) -> float:
-        """lambda_m = (1 - phi) lambda_s + phi lambda_f."""
-        phi = self.rock_porosity
-        return (1 - phi) * self.rock_conductivity + phi * self.fluid_conductivity
-
-    @property
-    def fluid_rho_c(self) -> float:
-        return self.fluid_density * self.fluid_heat_capacity
+    def report(self, problem, t: float) -> dict:
+        return {}
 
 
-def with_defaults(cls, **defaults):
-    """A copy of a parameter dataclass with other default values (same options)."""
-    fields = []
-    for f in dataclasses.fields(cls):
-        default = defaults.get(f.name, f.default)
-        fields.append((f.name, f.type, dataclasses.field(default=default, metadata=f.metadata)))
-    return dataclasses.make_dataclass(cls.__name__, fields, bases=(cls,), frozen=True,
-                                      namespace={"__doc__": cls.__doc__})
+@dataclass
+class Setup:
+    """What a scene builds on a mesh (see the module docstring)."""
+    model: Model
+    dirichlet: list[Dirichlet]
+    scales: dict[str, FieldScale]
+    initial: dict[str, Callable[[np.ndarray], np.ndarray]] = field(default_factory=dict)
+    monitor: Monitor = field(default_factory=Monitor)
+
+
+def constant(value: float) -> Callable:
+    """f(x) = value at every node (initial states)."""
+    return lambda x: np.full(len(x), value)
+
+
+def constant_in_time(value: float) -> Callable:
+    """f(x, t) = value (Dirichlet data)."""
+    return lambda x, t: np.full(len(x), value)
+
+
+def zero(x, t):
+    return np.zeros(len(x))
+
+
+def face(axis: int, value: float, atol: float = 1e-9) -> Callable:
+    """Boundary predicate x[axis] = value."""
+    return lambda x: np.isclose(x[:, axis], value, atol=atol)
 
 
 class Scene:
-    """Base class; subclasses set the class attributes and implement the hooks."""
+    """Base class of the scenes (see the module docstring)."""
     name: str = ""
     description: str = ""
-    parameter_sets: tuple = ()
+    parameters: tuple = ()
     time: TimeDefaults = TimeDefaults(1.0, 0.1)
     history_columns: tuple = ()
-    fractured: bool = False          # split the mesh along its fractures (physics.md section 1)
-    direct_solve: bool = False       # propose a sparse direct solve (solver.direct_solver_defaults)
 
-    def __init__(self, run: P.RunParams, values: dict):
+    def __init__(self, run: P.RunParams, p: Parameters):
         self.run = run
-        self.p = values                         # {class: frozen instance}
+        self.p = p
 
-    def __getitem__(self, cls):
-        """The parameter object of a set (or of its ``with_defaults`` variant)."""
-        if cls in self.p:
-            return self.p[cls]
-        for k, v in self.p.items():
-            if issubclass(k, cls):
-                return v
-        raise KeyError(cls.__name__)
+    @classmethod
+    def read(cls, run: P.RunParams) -> "Scene":
+        """The scene with its parameters read from the options database."""
+        return cls(run, P.read_all(cls.parameters, base=Parameters))
+
+    @property
+    def final_time(self) -> float:
+        return self.run.final_time or self.time.final_time
+
+    @property
+    def output_dir(self) -> str:
+        import os
+        return self.run.output_dir or os.path.join("output", self.name)
 
     # hooks ------------------------------------------------------------------
     def boundaries(self) -> dict[str, Callable[[np.ndarray], np.ndarray]]:
@@ -91,27 +111,17 @@ class Scene:
     def generate_mesh(self, path: str, size: float) -> str:
         raise NotImplementedError
 
-    def build(self, mesh, degree: int):
-        """Return (model, dirichlet list, scales, initial-value functions)."""
+    def build(self, mesh, degree: int) -> Setup:
         raise NotImplementedError
-
-    def monitors(self, problem, t: float, X=None) -> dict:
-        return {}
 
     def solver_defaults(self, comm) -> dict[str, str]:
         """Solver options this scene proposes over ``solver.SOLVER_DEFAULTS``
         (the user's options still win)."""
-        if self.direct_solve:
-            from ..solver import direct_solver_defaults
-            return direct_solver_defaults(comm)
         return {}
 
     def hit_times(self) -> list[float]:
         """Times the time stepper must land on exactly (reference comparisons)."""
         return []
-
-    def report(self, problem, t: float) -> dict:
-        return {}
 
 
 REGISTRY: dict[str, type] = {}

@@ -1,9 +1,14 @@
-"""Heat-transport verification scenes (physics.md section 6; verification.md 7a, 8).
+"""Heat-transport verification scenes (physics.md section 6; verification.md 7a, 8),
+all on the production path of the rock heat equation (kernels/heat.Heat,
+conservative form with SUPG).
 
 * ``heat_mms``: manufactured solution T = T_ref + A (1 + t/t_ref) g(x) on the
   unit square/cube with Dirichlet, Neumann and Robin sides and a uniform
   advection velocity; affine in t, so backward Euler adds no time error and
-  the reported L2/H1 errors are purely spatial.
+  the reported L2/H1 errors are purely spatial.  The Neumann and Robin sides
+  are outflow sides: the fluid carries its enthalpy out there
+  (``heat.outflow_term``) and q_N, h (T - T_ext) are the conductive
+  fluxes.
 * ``heat_erfc``: 1D conduction into a half-space after a step change of the
   surface temperature, T = T0 + (Ts - T0) erfc(z / (2 sqrt(kappa t))), on a
   strip graded toward the surface.
@@ -17,18 +22,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import erfc
 
-from .. import meshing
+from .. import materials as mt
+from .. import meshing, probes
 from ..assembly import FieldScale
-from ..kernels import heat
+from ..builders import ModelBuilder
+from ..constraints import Dirichlet
+from ..kernels import heat as hk
+from ..model import MATRIX
 from ..params import CELSIUS, param
-from ..solver import Dirichlet
-from .base import HeatMaterial, Scene, TimeDefaults, register, with_defaults
+from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, face, register
 
 FIELD = "Tm"
-
-
-def _face(axis, value):
-    return lambda x: np.isclose(x[:, axis], value, atol=1e-9)
+ROCK_AND_FLUID_HEAT = mt.ROCK_HEAT + ("rock_porosity",) + mt.FLUID_HEAT
 
 
 # ---------------------------------------------------------------------------
@@ -41,28 +46,43 @@ class MMSParams:
     mms_amplitude: float = param(10.0, "K", "amplitude A of the manufactured field", lo=0.0, lo_open=True)
 
 
-MMSMaterial = with_defaults(HeatMaterial, rock_density=1.0, rock_heat_capacity=1.0,
-                            rock_conductivity=1.0, fluid_density=1.0, fluid_heat_capacity=1.0)
+class _ErrorNorms(Monitor):
+    """L2 and H1 errors of Tm against the exact solution at the end."""
+
+    def __init__(self, scene):
+        self.scene = scene
+
+    def report(self, problem, t):
+        sc = self.scene
+        e = problem.region(MATRIX).error_norms(problem.local_arrays(problem.X, t)[0], FIELD,
+                                               sc.exact, sc.exact_grad, t)
+        mesh = problem.disc.mesh
+        return {"error": {"Tm_l2_rel": e["l2_rel"], "Tm_h1_rel": e["h1_rel"], "Tm_l2": e["l2"],
+                          "Tm_h1": e["h1"]},
+                "h_max": probes.global_max(mesh.dm.comm, mesh.h, empty=0.0)}
 
 
 @register
 class HeatMMS(Scene):
     name = "heat_mms"
     description = "manufactured solution for transient advection-diffusion (2D/3D, P1/P2)"
-    parameter_sets = (MMSMaterial, MMSParams)
+    parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT, rock_density=1.0,
+                           rock_heat_capacity=1.0,
+                           rock_conductivity=1.0, fluid_density=1.0, fluid_heat_capacity=1.0),
+                  MMSParams)
     time = TimeDefaults(final_time=1.0, dt_initial=0.25, mesh_size=0.125)
     t_ref = 1.0
     T_ref = 300.0
 
     def boundaries(self):
-        d = self[MMSParams].mms_dim
-        parts = {"x0": _face(0, 0.0), "x1": _face(0, 1.0), "y0": _face(1, 0.0), "y1": _face(1, 1.0)}
+        d = self.p.mms_dim
+        parts = {"x0": face(0, 0.0), "x1": face(0, 1.0), "y0": face(1, 0.0), "y1": face(1, 1.0)}
         if d == 3:
-            parts.update(z0=_face(2, 0.0), z1=_face(2, 1.0))
+            parts.update(z0=face(2, 0.0), z1=face(2, 1.0))
         return parts
 
     def generate_mesh(self, path, size):
-        return meshing.box(path, [1.0] * self[MMSParams].mms_dim, size, structured=True)
+        return meshing.box(path, [1.0] * self.p.mms_dim, size, structured=True)
 
     # exact solution ------------------------------------------------------------
     def _g(self, x):
@@ -91,30 +111,27 @@ class HeatMMS(Scene):
         return -2 * np.pi ** 2 * s2 * cz - 0.25 * np.pi ** 2 * g2 * cz + 2.0
 
     def exact(self, x, t):
-        A = self[MMSParams].mms_amplitude
-        return self.T_ref + A * (1 + t / self.t_ref) * self._g(x)
+        return self.T_ref + self.p.mms_amplitude * (1 + t / self.t_ref) * self._g(x)
 
     def exact_grad(self, x, t):
-        A = self[MMSParams].mms_amplitude
-        return A * (1 + t / self.t_ref) * self._grad_g(x)
+        return self.p.mms_amplitude * (1 + t / self.t_ref) * self._grad_g(x)
 
     def _velocity(self, x, t):
-        d = x.shape[-1]
-        return np.asarray(self[MMSParams].mms_velocity[:d], dtype=float)
+        return np.asarray(self.p.mms_velocity[:x.shape[-1]], dtype=float)
 
     def _source(self, x, t):
-        m, A = self[MMSMaterial], self[MMSParams].mms_amplitude
+        p, A = self.p, self.p.mms_amplitude
         dTdt = A / self.t_ref * self._g(x)
         adv = np.einsum("...a,a->...", self.exact_grad(x, t), self._velocity(x, t))
         lap = A * (1 + t / self.t_ref) * self._lap_g(x)
-        return m.rho_c * dTdt + m.fluid_rho_c * adv - m.conductivity * lap
+        return p.rho_c * dTdt + p.fluid_rho_c * adv - p.conductivity * lap
 
     def build(self, mesh, degree):
-        m, mp = self[MMSMaterial], self[MMSParams]
-        c = heat.HeatCoefficients(m.rho_c, m.conductivity, m.fluid_rho_c, self._velocity,
-                                  self._source, supg=True, degree=degree)
-        h = mp.mms_robin_coefficient
-        lam = m.conductivity
+        p = self.p
+        b = ModelBuilder(p, mesh.dim)
+        heat = b.matrix_heat(degree, velocity=self._velocity, source=self._source,
+                             reference_temperature=self.T_ref)
+        h, lam = p.mms_robin_coefficient, p.conductivity
 
         def inflow(x, t):    # q_N = lambda grad T . n on x = 1 (n = +x)
             return lam * self.exact_grad(x, t)[..., 0]
@@ -122,171 +139,155 @@ class HeatMMS(Scene):
         def t_ext(x, t):     # -lambda grad T . n = h (T - T_ext) on y = 1 (n = +y)
             return self.exact(x, t) + lam * self.exact_grad(x, t)[..., 1] / h
 
-        facets = [heat.neumann(FIELD, "x1", inflow), heat.robin(FIELD, "y1", h, t_ext)]
-        model = heat.heat_model(c, FIELD, facets)
-        dir_parts = ["x0", "y0"] + (["z0", "z1"] if mp.mms_dim == 3 else [])
-        rate = lambda x, t: mp.mms_amplitude / self.t_ref * self._g(x)  # noqa: E731
-        dirichlet = [Dirichlet(FIELD, b, self.exact, rate) for b in dir_parts]
-        scales = {FIELD: FieldScale(scale=mp.mms_amplitude, offset=self.T_ref)}
-        return model, dirichlet, scales, {FIELD: lambda x: self.exact(x, 0.0)}
-
-    def report(self, problem, t):
-        e = problem.asm.error_norms(problem.local_arrays(problem.X, t)[0], FIELD,
-                                    self.exact, self.exact_grad, t)
-        hmax = problem.disc.mesh.dm.comm.tompi4py().allreduce(
-            float(problem.disc.mesh.h.max()) if problem.disc.mesh.ncells else 0.0, op=_max())
-        return {"error": {"Tm_l2_rel": e["l2_rel"], "Tm_h1_rel": e["h1_rel"],
-                          "Tm_l2": e["l2"], "Tm_h1": e["h1"]}, "h_max": hmax}
-
-
-def _max():
-    from mpi4py import MPI
-    return MPI.MAX
+        model = b.build()
+        model.facets += [hk.neumann(FIELD, "x1", inflow), hk.robin(FIELD, "y1", h, t_ext),
+                         hk.outflow_term(heat, "x1"), hk.outflow_term(heat, "y1")]
+        dir_parts = ["x0", "y0"] + (["z0", "z1"] if p.mms_dim == 3 else [])
+        rate = lambda x, t: p.mms_amplitude / self.t_ref * self._g(x)  # noqa: E731
+        dirichlet = [Dirichlet(FIELD, part, self.exact, rate) for part in dir_parts]
+        scales = {FIELD: FieldScale(scale=p.mms_amplitude, offset=self.T_ref)}
+        return Setup(model, dirichlet, scales, {FIELD: lambda x: self.exact(x, 0.0)}, _ErrorNorms(self))
 
 
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class ErfcParams:
     """Half-space conduction after a surface temperature step (heat_erfc)"""
-    initial_temperature: float = param(80.0, "degC", "initial rock temperature T0")
-    surface_temperature: float = param(20.0, "degC", "surface temperature Ts for t > 0")
-    erfc_depth: float = param(10.0, "m", "depth of the strip (insulated at the far end)", lo=0.0, lo_open=True)
+    erfc_depth: float = param(10.0, "m", "depth of the strip (insulated at the far end)", lo=0.0,
+                              lo_open=True)
     erfc_width: float = param(0.5, "m", "width of the strip", lo=0.0, lo_open=True)
     erfc_surface_size: float = param(0.02, "m", "mesh size at the surface", lo=0.0, lo_open=True)
+
+
+class _ErfcMonitor(Monitor):
+    def __init__(self, scene):
+        self.scene = scene
+
+    def error(self, problem, t):
+        p = self.scene.p
+        err = probes.max_nodal_error(problem, FIELD, lambda x: self.scene.exact(x, t), t=t)
+        return err / abs(p.initial_temperature - p.surface_temperature)
+
+    def __call__(self, problem, t, X=None):
+        T = problem.field_values(FIELD, t=t)[:, 0]
+        x = problem.disc.field_node_coordinates(FIELD)
+        out = {}
+        for z in (0.5, 1.0, 2.0):
+            out[f"T_z{z:g}"] = probes.nearest(problem.dm.comm, x, (z, 0.0), [T - CELSIUS], ord=1)[0]
+        out["error_max"] = self.error(problem, t)
+        return out
+
+    def report(self, problem, t):
+        return {"error": {"Tm_max_rel": self.error(problem, t)}}
 
 
 @register
 class HeatErfc(Scene):
     name = "heat_erfc"
     description = "1D transient conduction into a half-space (verification.md 7a), graded mesh"
-    parameter_sets = (HeatMaterial, ErfcParams)
+    parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT),
+                  mt.group("Initial and surface temperature", ("initial_temperature", "surface_temperature")),
+                  ErfcParams)
     time = TimeDefaults(final_time=1e6, dt_initial=10.0, dt_growth=1.01, dt_max=1e4,
                         output_interval=50, mesh_size=0.25)
     history_columns = ("T_z0.5", "T_z1", "T_z2", "error_max")
 
     def boundaries(self):
-        return {"surface": _face(0, 0.0)}
+        return {"surface": face(0, 0.0)}
 
     def generate_mesh(self, path, size):
-        p = self[ErfcParams]
+        p = self.p
         return meshing.box(path, [p.erfc_depth, p.erfc_width], size,
                            grading=meshing.Grading(axis=0, size_min=p.erfc_surface_size,
                                                    distance=0.5 * p.erfc_depth))
 
     def exact(self, x, t):
-        p, m = self[ErfcParams], self[HeatMaterial]
-        kappa = m.conductivity / m.rho_c
-        T0, Ts = p.initial_temperature + CELSIUS, p.surface_temperature + CELSIUS
+        p = self.p
+        kappa = p.conductivity / p.rho_c
+        T0, Ts = p.T0, p.surface_temperature + CELSIUS
         z = x[..., 0]
         if t <= 0:
             return np.full(z.shape, T0)
         return T0 + (Ts - T0) * erfc(z / (2 * np.sqrt(kappa * t)))
 
     def build(self, mesh, degree):
-        p, m = self[ErfcParams], self[HeatMaterial]
-        c = heat.HeatCoefficients(m.rho_c, m.conductivity, degree=degree)
-        Ts = p.surface_temperature + CELSIUS
-        T0 = p.initial_temperature + CELSIUS
-        model = heat.heat_model(c, FIELD)
-        dirichlet = [Dirichlet(FIELD, "surface", lambda x, t: np.full(len(x), Ts))]
+        p = self.p
+        b = ModelBuilder(p, mesh.dim)
+        b.matrix_heat(degree)
+        Ts, T0 = p.surface_temperature + CELSIUS, p.T0
+        dirichlet = [Dirichlet(FIELD, "surface", constant_in_time(Ts))]
         scales = {FIELD: FieldScale(scale=abs(T0 - Ts) or 1.0, offset=T0)}
-        return model, dirichlet, scales, {FIELD: lambda x: np.full(len(x), T0)}
-
-    def _nodal_error(self, problem, t):
-        p = self[ErfcParams]
-        err = problem.max_nodal_error(FIELD, lambda x: self.exact(x, t), t=t)
-        return err / abs(p.initial_temperature - p.surface_temperature)
-
-    def monitors(self, problem, t, X=None):
-        T = problem.field_values(FIELD, t=t)[:, 0]
-        x = problem.disc.field_node_coordinates(FIELD)
-        out = {}
-        comm = problem.disc.mesh.dm.comm.tompi4py()
-        for z in (0.5, 1.0, 2.0):
-            d = np.abs(x[:, 0] - z) + np.abs(x[:, 1])
-            k = int(np.argmin(d)) if len(d) else 0
-            best = comm.allreduce((float(d[k]) if len(d) else np.inf, float(T[k] - CELSIUS) if len(d) else 0.0),
-                                  op=_minloc())
-            out[f"T_z{z:g}"] = best[1]
-        out["error_max"] = self._nodal_error(problem, t)
-        return out
-
-    def report(self, problem, t):
-        return {"error": {"Tm_max_rel": self._nodal_error(problem, t)}}
-
-
-def _minloc():
-    from mpi4py import MPI
-    return MPI.MIN
+        return Setup(b.build(), dirichlet, scales, {FIELD: constant(T0)}, _ErfcMonitor(self))
 
 
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class AdvectionParams:
     """Advection-dominated front in a channel (heat_advection)"""
-    initial_temperature: float = param(100.0, "degC", "initial temperature T0")
-    injection_temperature: float = param(20.0, "degC", "inflow temperature Tinj")
-    advection_velocity: tuple = param((1e-5, 0.0), "m/s", "uniform Darcy velocity vx,vy (inflow only through x = 0)")
+    advection_velocity: tuple = param((1e-5, 0.0), "m/s",
+                                      "uniform Darcy velocity vx,vy (inflow only through x = 0)")
     advection_length: float = param(100.0, "m", "channel length", lo=0.0, lo_open=True)
     advection_height: float = param(20.0, "m", "channel height", lo=0.0, lo_open=True)
     supg: bool = param(True, "-", "SUPG stabilisation")
 
 
-AdvMaterial = with_defaults(HeatMaterial, rock_conductivity=0.1, fluid_conductivity=0.0)
+class _ExtremesMonitor(Monitor):
+    """T_min, T_max and the overshoot every step, and their extremes over the run."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.extremes = [np.inf, -np.inf]
+        self.lo, self.hi = sorted((scene.p.injection_temperature, scene.p.initial_temperature))
+
+    def __call__(self, problem, t, X=None):
+        tmin, tmax = probes.field_range(problem, FIELD, t=t, offset=CELSIUS)
+        self.extremes = [min(self.extremes[0], tmin), max(self.extremes[1], tmax)]
+        over = max(tmax - self.hi, self.lo - tmin, 0.0) / (self.hi - self.lo)
+        return {"T_min": tmin, "T_max": tmax, "overshoot": over,
+                "cell_peclet": self.scene.cell_peclet(problem.disc.mesh)}
+
+    def report(self, problem, t):
+        tmin, tmax = self.extremes
+        return {"overshoot_rel": max(tmax - self.hi, self.lo - tmin, 0.0) / (self.hi - self.lo),
+                "T_min_all_steps": tmin, "T_max_all_steps": tmax,
+                "cell_peclet_min": self.scene.cell_peclet(problem.disc.mesh)}
 
 
 @register
 class HeatAdvection(Scene):
     name = "heat_advection"
     description = "cold front advected at cell Peclet >= 100 (SUPG boundedness check)"
-    parameter_sets = (AdvMaterial, AdvectionParams)
+    parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT, rock_conductivity=0.1,
+                           fluid_conductivity=0.0),
+                  mt.group("Temperatures", ("initial_temperature", "injection_temperature"),
+                           initial_temperature=100.0),
+                  AdvectionParams)
     time = TimeDefaults(final_time=1.0e7, dt_initial=2e5, output_interval=5, mesh_size=2.5)
     history_columns = ("T_min", "T_max", "overshoot", "cell_peclet")
 
     def boundaries(self):
-        return {"inlet": _face(0, 0.0)}
+        return {"inlet": face(0, 0.0), "outlet": face(0, self.p.advection_length)}
 
     def generate_mesh(self, path, size):
-        p = self[AdvectionParams]
+        p = self.p
         return meshing.box(path, [p.advection_length, p.advection_height], size)
 
     def _velocity(self, x, t):
-        return np.asarray(self[AdvectionParams].advection_velocity[:2], dtype=float)
+        return np.asarray(self.p.advection_velocity[:2], dtype=float)
 
     def build(self, mesh, degree):
-        p, m = self[AdvectionParams], self[AdvMaterial]
-        c = heat.HeatCoefficients(m.rho_c, m.conductivity, m.fluid_rho_c, self._velocity,
-                                  supg=p.supg, degree=degree)
-        Ti, T0 = p.injection_temperature + CELSIUS, p.initial_temperature + CELSIUS
-        model = heat.heat_model(c, FIELD)
-        dirichlet = [Dirichlet(FIELD, "inlet", lambda x, t: np.full(len(x), Ti))]
+        p = self.p
+        b = ModelBuilder(p, mesh.dim)
+        heat = b.matrix_heat(degree, velocity=self._velocity, supg=p.supg, reference_temperature=p.T0)
+        model = b.build()
+        model.facets.append(hk.outflow_term(heat, "outlet"))
+        Ti, T0 = p.T_inj, p.T0
+        dirichlet = [Dirichlet(FIELD, "inlet", constant_in_time(Ti))]
         scales = {FIELD: FieldScale(scale=abs(T0 - Ti), offset=T0)}
-        self._extremes = [np.inf, -np.inf]
-        return model, dirichlet, scales, {FIELD: lambda x: np.full(len(x), T0)}
+        return Setup(model, dirichlet, scales, {FIELD: constant(T0)}, _ExtremesMonitor(self))
 
     def cell_peclet(self, mesh):
-        p, m = self[AdvectionParams], self[AdvMaterial]
-        w = m.fluid_rho_c / m.rho_c * np.linalg.norm(p.advection_velocity)
-        kappa = m.conductivity / m.rho_c
-        hmin = mesh.dm.comm.tompi4py().allreduce(float(mesh.h.min()) if mesh.ncells else np.inf, op=_minloc())
-        return w * hmin / (2 * kappa)
-
-    def monitors(self, problem, t, X=None):
-        p = self[AdvectionParams]
-        T = problem.field_values(FIELD, t=t)[:, 0] - CELSIUS
-        comm = problem.disc.mesh.dm.comm.tompi4py()
-        tmin = comm.allreduce(float(T.min()) if len(T) else np.inf, op=_minloc())
-        tmax = comm.allreduce(float(T.max()) if len(T) else -np.inf, op=_max())
-        self._extremes = [min(self._extremes[0], tmin), max(self._extremes[1], tmax)]
-        lo, hi = sorted((p.injection_temperature, p.initial_temperature))
-        over = max(tmax - hi, lo - tmin, 0.0) / (hi - lo)
-        return {"T_min": tmin, "T_max": tmax, "overshoot": over,
-                "cell_peclet": self.cell_peclet(problem.disc.mesh)}
-
-    def report(self, problem, t):
-        p = self[AdvectionParams]
-        lo, hi = sorted((p.injection_temperature, p.initial_temperature))
-        tmin, tmax = self._extremes
-        return {"overshoot_rel": max(tmax - hi, lo - tmin, 0.0) / (hi - lo),
-                "T_min_all_steps": tmin, "T_max_all_steps": tmax,
-                "cell_peclet_min": self.cell_peclet(problem.disc.mesh)}
+        p = self.p
+        w = p.fluid_rho_c / p.rho_c * np.linalg.norm(p.advection_velocity)
+        kappa = p.conductivity / p.rho_c
+        return w * probes.global_min(mesh.dm.comm, mesh.h) / (2 * kappa)

@@ -11,7 +11,8 @@ from petthm.verify import jacobian_fd_block_errors
 
 COARSE = dict(thm_scene2_fracture_size=40, thm_scene2_well_size=20, thm_scene2_layer=0)
 #: a coarse layered mesh (7200 cells)
-LAYERED = ("-thm_fe_degree", 1, "-thm_scene2_fracture_size", 20, "-thm_scene2_well_size", 10, "-thm_scene2_layer", 2,
+LAYERED = ("-thm_fe_degree", 1, "-thm_scene2_fracture_size", 20, "-thm_scene2_well_size", 10,
+           "-thm_scene2_layer", 2,
            "-thm_scene2_layer_growth", 2.5, "-thm_mesh_size", 150)
 COUPLINGS = {("u", "lam"), ("lam", "u"), ("u", "pf"), ("u", "Tm"), ("pf", "lam"), ("pf", "u"), ("pf", "Tf"),
              ("Tf", "lam"), ("Tf", "u"), ("Tf", "pf")}
@@ -44,7 +45,8 @@ def test_scene2_jacobian_check_can_fail(tmp_path, monkeypatch):
     full = ct.Aperture.jacobians
     monkeypatch.setattr(ct.Aperture, "jacobians", lambda self, test, s0, s1: [] if test == "Tf" else
                         full(self, test, s0, s1))
-    problem = build_problem(tmp_path, "penny_impermeable", thm_fe_degree=1, thm_fracture_heat_exchange="equilibrium",
+    problem = build_problem(tmp_path, "penny_impermeable", thm_fe_degree=1,
+                            thm_fracture_heat_exchange="equilibrium",
                             **COARSE)
     err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=1e-6)
     print({f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
@@ -70,7 +72,8 @@ def test_scene2_coarse_run(tmp_path, petthm_run):
     assert s["status"] == "completed" and s["rejected_steps"] == 0
     assert lam[0] == pytest.approx(40e6, rel=1e-12) and a[0] == pytest.approx(2e-4, rel=1e-12)
     assert lam[-1] < 0.95 * lam[0] and a[-1] > 1.1 * a[0]
-    assert np.allclose(a, 0.6e-3 - lam / 1e11, rtol=1e-12, atol=0)    # closed at the injector: a = a0 - lam/Kn
+    assert np.allclose(a, 0.6e-3 - lam / 1e11, rtol=1e-12,
+                       atol=0)    # closed at the injector: a = a0 - lam/Kn
     assert s["balance_max"]["aperture_identity"] <= 1e-12
     assert s["balance_max"]["mass_balance"] <= 1e-6 and s["balance_max"]["energy_balance"] <= 1e-4
     assert all(int(r["nodes_open"]) == 0 for r in h)
@@ -102,7 +105,8 @@ def test_scene2_thermal_shock_230K(tmp_path, petthm_run):
                       "-thm_initial_temperature", 250)
     h = _history(tmp_path)
     opened = max(int(r["nodes_open"]) for r in h)
-    vals = np.array([[float(r[k]) for k in ("injection_pressure", "lam_min", "aperture_max", "Tf_min")] for r in h])
+    vals = np.array([[float(r[k]) for k in ("injection_pressure", "lam_min", "aperture_max",
+                                            "Tf_min")] for r in h])
     print("open vertices", opened, "rejected", s["rejected_steps"], "last", vals[-1], s["balance_max"])
     assert s["status"] == "completed" and np.isfinite(vals).all()
     assert opened > 0 and vals[:, 1].min() >= -1e-12 * 40e6      # lam >= 0 to round-off of its scale
@@ -134,4 +138,4 @@ def test_scene2_refuses_an_open_start(tmp_path, petthm_run):
     out = proc.stdout + proc.stderr
     print(out)
     assert proc.returncode != 0 and "Traceback" not in out
-    assert "-thm_initial_pressure" in out and "-thm_scene2_normal_stress" in out
+    assert "-thm_initial_pressure" in out and "-thm_insitu_stress" in out

@@ -69,7 +69,8 @@ def test_terzaghi_first_step_pressure_oscillation(tmp_path, udeg, stab, ok):
     first step of 1e-6 t_c.  With the pressure stabilisation the pressure stays
     within [0, p0] to 5 % of the load (P1/P1 and P2/P1); without it the same
     run leaves that range by far more (the check can fail)."""
-    _, s = run_petthm("terzaghi", tmp_path, *STIFF, "-thm_fe_degree", udeg, "-thm_terzaghi_pressure_degree", 1,
+    _, s = run_petthm("terzaghi", tmp_path, *STIFF, "-thm_fe_degree", udeg, "-thm_terzaghi_pressure_degree",
+                      1,
                       "-thm_biot_stabilization", stab)
     over = s["p_overshoot_max_rel_load"]
     print(udeg, stab, over)

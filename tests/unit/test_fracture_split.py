@@ -21,7 +21,7 @@ MESHES = {
 
 
 def _stats(path, ranks):
-    cmd = [sys.executable, "-m", "petthm.fracture", str(path)]
+    cmd = [sys.executable, os.path.join(ROOT, "scripts", "split_report.py"), str(path)]
     if ranks > 1:
         cmd = ["mpiexec", "-n", str(ranks)] + cmd
     p = subprocess.run(cmd, cwd=ROOT, env=dict(os.environ, **MPI_ENV), capture_output=True,
@@ -89,16 +89,20 @@ def _heat_on(path, split):
     from petthm import fracture as F
     from petthm.assembly import FieldScale
     from petthm.fields import Discretisation
+    from petthm.constraints import Dirichlet
+    from petthm.fields import FieldSpec
     from petthm.kernels import heat
     from petthm.mesh import Mesh, distribute, label_boundaries, read_plex
-    from petthm.solver import (SOLVER_DEFAULTS, Dirichlet, Problem, StepControl, TimeStepper,
-                               propose_defaults)
+    from petthm.model import Domain, Model
+    from petthm.problem import Problem
+    from petthm.solver import SOLVER_DEFAULTS, StepControl, TimeStepper, propose_defaults
     dm = read_plex(str(path), PETSc.COMM_WORLD)
     label_boundaries(dm, {"bottom": lambda x: np.isclose(x[:, 1], 0.0)})
     if split:
         dm, _ = F.split_fractures(dm)
     mesh = Mesh(distribute(dm))
-    model = heat.heat_model(heat.HeatCoefficients(rho_c=1.0, conductivity=0.05, degree=2), "Tm")
+    model = Model([FieldSpec("Tm", 1, 2)])
+    model.add(heat.heat_terms(heat.Heat(Domain.MATRIX, "Tm", 1.0, 0.05, degree=2)))
     disc = Discretisation(mesh, model.fields, {"Tm": ["bottom"]})
     problem = Problem(disc, model, {"Tm": FieldScale(60.0, 353.15)},
                       [Dirichlet("Tm", "bottom", lambda x, t: np.full(len(x), 293.15))])

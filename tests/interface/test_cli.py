@@ -50,10 +50,11 @@ def test_missing_mesh_file_is_an_error(tmp_path):
     assert "nope.msh" in msg and "does not exist" in msg and "-thm_mesh_file" in msg
 
 
-def test_negative_conductivity_is_an_error(tmp_path):
-    proc, _ = run_petthm("heat_erfc", tmp_path, "-thm_rock_conductivity", "-1", check=False)
+@pytest.mark.parametrize("value", ["-1", "inf", "nan"])
+def test_out_of_range_or_non_finite_conductivity_is_an_error(tmp_path, value):
+    proc, _ = run_petthm("heat_erfc", tmp_path, "-thm_rock_conductivity", value, check=False)
     msg = _one_line_error(proc)
-    assert "-thm_rock_conductivity = -1.0" in msg and "(0.0, inf]" in msg
+    assert f"-thm_rock_conductivity = {float(value)}" in msg and "(0, inf)" in msg
 
 
 def test_missing_options_file_is_an_error(tmp_path):

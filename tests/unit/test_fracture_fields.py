@@ -8,8 +8,9 @@ from petthm import fracture as F, meshing as M
 from petthm.assembly import FieldScale
 from petthm.fields import Discretisation, FieldSpec
 from petthm.mesh import Mesh, distribute, label_boundaries, read_plex
-from petthm.model import CellJacobian, CellResidual, Model
-from petthm.solver import Dirichlet, Problem
+from petthm.constraints import Dirichlet
+from petthm.model import FRACTURE, CellJacobian, CellResidual, Domain, Model
+from petthm.problem import Problem
 
 
 def _fracture_problem(path, dim, degree, exact, source=0.0):
@@ -18,7 +19,7 @@ def _fracture_problem(path, dim, degree, exact, source=0.0):
     label_boundaries(dm, {"x0": lambda x: np.isclose(x[:, 0], 0.0), "x1": lambda x: np.isclose(x[:, 0], 1.0)})
     dm, _ = F.split_fractures(dm)
     mesh = Mesh(distribute(dm))
-    surf = F.FractureSurface(mesh)
+    surf = mesh.fracture
     k = 2.5
 
     def f1(ctx):
@@ -29,9 +30,10 @@ def _fracture_problem(path, dim, degree, exact, source=0.0):
 
     def g3(ctx):
         return (k * np.eye(dim))[None, None, None, :, None, :]
-    model = Model([FieldSpec("pf", 1, degree, region="fracture")], [CellResidual("pf", f0, f1, region="fracture")],
-                  [CellJacobian("pf", "pf", g3=g3, region="fracture")])
-    disc = Discretisation(mesh, model.fields, {"pf": ["x0", "x1"]}, regions={"fracture": surf})
+    model = Model([FieldSpec("pf", 1, degree, region=Domain.FRACTURE)],
+                  [CellResidual("pf", f0, f1, region=FRACTURE)],
+                  [CellJacobian("pf", "pf", g3=g3, region=FRACTURE)])
+    disc = Discretisation(mesh, model.fields, {"pf": ["x0", "x1"]}, regions={Domain.FRACTURE: surf})
     bcs = [Dirichlet("pf", b, lambda x, t: exact(x)) for b in ("x0", "x1")]
     return Problem(disc, model, {"pf": FieldScale(1.0)}, bcs), surf
 
@@ -110,7 +112,7 @@ def test_fracture_field_in_parallel(tmp_path, dim):
         [M.Fracture("rectangle", center=(0.5, 0.5, 0.5), half=(0.5, 0.3))]
     path = M.box_with_fractures(str(tmp_path / "m.msh"), [1] * dim, 0.25 if dim == 3 else 0.1, fr)
     script = tmp_path / "run.py"
-    script.write_text(PARALLEL_SCRIPT.format(tests=os.path.join(ROOT, "tests"), path=path, dim=dim))
+    script.write_text(PARALLEL_SCRIPT.format(tests=os.path.join(ROOT, "tests", "unit"), path=path, dim=dim))
     out = {}
     for n in (1, 2, 3):
         cmd = [sys.executable, str(script)]

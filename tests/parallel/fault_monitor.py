@@ -1,23 +1,23 @@
-"""Fault injection for tests/test_parallel.py: ``python fault_monitor.py RANK
+"""Fault injection for tests/parallel/test_parallel.py: ``python fault_monitor.py RANK
 OUTDIR`` runs ``heat_erfc`` with a scene monitor that raises on rank RANK
 only, at its third call."""
 import sys
 
 from petthm.__main__ import main
 from petthm.scenes import load_all
-from petthm.scenes.base import REGISTRY
 
 
 def _inject(rank: int) -> None:
-    cls = REGISTRY["heat_erfc"]
-    original, calls = cls.monitors, [0]
+    from petthm.scenes import heat
+    cls = heat._ErfcMonitor
+    original, calls = cls.__call__, [0]
 
-    def monitors(self, problem, t, X=None):
+    def monitor(self, problem, t, X=None):
         calls[0] += 1
         if calls[0] == 3 and problem.dm.comm.rank == rank:
             raise RuntimeError(f"injected monitor failure on rank {rank}")
         return original(self, problem, t, X)
-    cls.monitors = monitors
+    cls.__call__ = monitor
 
 
 if __name__ == "__main__":

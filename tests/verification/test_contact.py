@@ -27,8 +27,10 @@ def test_contact_jacobian_matches_finite_differences(tmp_path, scene, opts, degr
 def test_contact_jacobian_check_detects_a_missing_block(tmp_path):
     """Negative control: without the lam-u+ block the check fails."""
     problem = build_problem(tmp_path, "partial_opening", thm_partial_crack_size=0.1)
-    asm = problem.region("fracture")
-    asm.model.jacobians[:] = [j for j in asm.model.jacobians if not (j.test == "lam" and j.trial == "u+")]
+    from petthm.model import FRACTURE, Side, Trace
+    asm = problem.region(FRACTURE)
+    asm.model.jacobians[:] = [j for j in asm.model.jacobians
+                              if not (j.test == "lam" and j.trial == Trace("u", Side.PLUS))]
     asm._build_pattern()
     problem.J = None
     err = jacobian_fd_error(problem, t=0.5, shift=1.0, eps=1e-6)
@@ -49,7 +51,8 @@ def test_sneddon_nearly_incompressible(tmp_path, petthm_run):
     """Stiff case nu = 0.49 (P2 displacement): converges, no NaN, opening
     within 2 % once the clamped boundary is far (the 2D far-field error
     falls like c/L here: 5 % at L = 20 c, 1.2 % at 80 c)."""
-    _, s = petthm_run("sneddon", tmp_path, *SNEDDON_2D, "-thm_rock_poisson_ratio", 0.49, "-thm_sneddon_box", 80)
+    _, s = petthm_run("sneddon", tmp_path, *SNEDDON_2D, "-thm_rock_poisson_ratio", 0.49, "-thm_sneddon_box",
+                      80)
     print("nu = 0.49", s["error"])
     assert s["status"] == "completed" and s["error"]["centre_error"] <= 2e-2
 
@@ -66,12 +69,13 @@ def test_contact_patch_is_exact(tmp_path, petthm_run, dim, degree):
     assert abs(s["aperture_mean"] - 0.2e-3) <= 1e-10 * 0.2e-3
 
 
-@pytest.mark.parametrize("sigma,kn,aperture", [(75e6, 1e11, 0.05e-3), (60e6, 1e8, 0.6e-6), (60e6, 1e14, 0.5996e-3)])
+@pytest.mark.parametrize("sigma,kn,aperture",
+                         [(75e6, 1e11, 0.05e-3), (60e6, 1e8, 0.6e-6), (60e6, 1e14, 0.5996e-3)])
 def test_contact_patch_joint_stiffness(tmp_path, petthm_run, sigma, kn, aperture):
     """0.05 mm at 75/20 MPa; the stiff and soft extremes Kn = 1e8 (the
     residual aperture 1e-3 a0) and 1e14 Pa/m."""
-    _, s = petthm_run("contact_patch", tmp_path, "-thm_contact_dim", 2, "-thm_contact_normal_stress", sigma,
-                      "-thm_joint_stiffness", kn)
+    _, s = petthm_run("contact_patch", tmp_path, "-thm_contact_dim", 2, "-thm_insitu_stress", sigma,
+                      "-thm_fracture_normal_stiffness", kn)
     e = s["error"]
     assert s["status"] == "completed"
     assert e["lam_error"] <= 1e-6 and e["opening_max"] <= 1e-9 and e["aperture_error"] <= 1e-10
@@ -96,7 +100,8 @@ def test_partial_opening_both_vi_methods(tmp_path, petthm_run):
 
 def test_contact_needs_a_vi_solver(tmp_path, petthm_run):
     """A Newton method that ignores the bounds is refused with a one-line error."""
-    proc, _ = petthm_run("contact_patch", tmp_path, "-thm_contact_dim", 2, "-snes_type", "newtonls", check=False)
+    proc, _ = petthm_run("contact_patch", tmp_path, "-thm_contact_dim", 2, "-snes_type", "newtonls",
+                         check=False)
     out = proc.stdout + proc.stderr
     print(out)
     assert proc.returncode != 0 and "Traceback" not in out
@@ -108,7 +113,7 @@ def test_deformable_flow_jacobian_matches_finite_differences(tmp_path, degree):
     """Fracture flow with a = ac(lam) + max(g, 0): pf against pf, lam, u+, u-
     (da/dt, a c_f dp/dt, a^3 in the cubic law), and the face load against pf."""
     problem = build_problem(tmp_path, "fracture_inflation", thm_fe_degree=degree, thm_partial_crack_size=0.1,
-                            thm_inflation_compressibility=4.5e-10)
+                            thm_fluid_compressibility=4.5e-10)
     err = jacobian_fd_error(problem, t=100.0, shift=0.1, eps=1e-6)
     print(degree, "jacobian fd error", err)
     assert err <= 1e-6, err

@@ -43,7 +43,8 @@ def test_jacobian_check_detects_a_missing_coupling(tmp_path):
     SUPG depend on grad pf) the check fails."""
     problem = _problem(tmp_path, "lauwerier", thm_fe_degree=1, thm_fracture_heat_exchange="nusselt",
                        **COARSE_LAUWERIER)
-    asm = problem.region("fracture")
+    from petthm.model import FRACTURE
+    asm = problem.region(FRACTURE)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians if not (j.test == "Tf" and j.trial == "pf")]
     asm._build_pattern()
     problem.J = None
@@ -103,7 +104,8 @@ def test_scene1_more_leakoff_gives_hotter_production_for_longer(tmp_path):
     is hotter than its 1D counterpart.  (At 1e8 s the 1D cases are colder
     than the impermeable one: docs/scene1.md.)"""
     import csv
-    coarse = ("-thm_fe_degree", 1, "-thm_final_time", 1e8, "-thm_mesh_size", 50, "-thm_scene1_fracture_size", 2)
+    coarse = ("-thm_fe_degree", 1, "-thm_final_time", 1e8, "-thm_mesh_size", 50, "-thm_scene1_fracture_size",
+              2)
     T6, T8 = {}, {}
     for name, k in (("0", "0"), ("1e-14", "0,1e-14"), ("1e-13", "0,1e-13"), ("1e-12", "0,1e-12"),
                     ("2d", "1e-13")):
@@ -111,7 +113,8 @@ def test_scene1_more_leakoff_gives_hotter_production_for_longer(tmp_path):
         rows = list(csv.DictReader(open(tmp_path / name / "history.csv")))[1:]
         t = np.array([float(r["time"]) for r in rows])
         T = np.array([float(r["production_temperature"]) for r in rows])
-        T6[name], T8[name] = float(np.interp(np.log10(3e6), np.log10(t), T)), s["production_temperature_final"]
+        T6[name], T8[name] = float(np.interp(np.log10(3e6), np.log10(t),
+                                             T)), s["production_temperature_final"]
         assert s["balance_max"]["mass_balance"] <= 1e-6 and s["balance_max"]["energy_balance"] <= 1e-6
     print(T6, T8)
     seq = [T6[n] for n in ("0", "1e-14", "1e-13", "1e-12")]

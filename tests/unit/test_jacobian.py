@@ -8,8 +8,8 @@ from petsc4py import PETSc
 
 from petthm.app import Run, make_scene
 from petthm.fields import Discretisation
-from petthm.model import CellJacobian
-from petthm.solver import Problem
+from petthm.model import MATRIX, CellJacobian
+from petthm.problem import Problem
 from petthm.verify import jacobian_fd_error
 
 
@@ -34,7 +34,7 @@ def test_heat_jacobian_matches_finite_differences(tmp_path, dim, degree):
 def test_jacobian_check_detects_a_missing_term(tmp_path):
     """Negative control: dropping the consistent SUPG Laplacian block must fail."""
     problem = _heat_problem(tmp_path, 2, 2, thm_rock_conductivity=0.5, thm_mms_velocity="3,2")
-    terms = problem.asm.model.jacobians          # the matrix assembler's term table
+    terms = problem.region(MATRIX).model.jacobians          # the matrix assembler's term table
     jb = terms[0]
     assert jb.g2_lap is not None
     terms[0] = dataclasses.replace(jb, g2_lap=None)
@@ -51,7 +51,7 @@ def test_heat_jacobian_without_advection(tmp_path):
     o.setValue("thm_output_dir", str(tmp_path))
     o.setValue("thm_mesh_size", 2.0)
     run = Run(make_scene("heat_erfc"))
-    _, problem, _, _ = run.setup(run.build_mesh())
+    _, problem, *_ = run.setup(run.build_mesh())
     assert problem.model.jacobians[0].g1 is None
     err = jacobian_fd_error(problem, t=10.0, shift=0.1)
     print("jacobian fd error (conduction only)", err)
@@ -106,5 +106,5 @@ def test_cell_constant_and_pointwise_coefficients_give_the_same_matrix(tmp_path)
     for constant in (True, False):
         p = _vector_problem(tmp_path, constant)
         xl = np.linspace(-1, 1, p.disc.nlocal)
-        vals.append(p.asm.jacobian_values(xl, xl, 0.0, 2.0))
+        vals.append(p.region(MATRIX).jacobian_values(xl, xl, 0.0, 2.0))
     assert np.allclose(vals[0], vals[1], rtol=1e-12, atol=1e-12 * np.abs(vals[1]).max())

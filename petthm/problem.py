@@ -1,0 +1,274 @@
+"""A transient FE problem: state, residual and Jacobian callbacks, scaling.
+
+``Problem`` holds the solution vector and evaluates F(t, X, Xdot) and
+dF/dX + shift dF/dXdot (TS's IFunction/IJacobian, physics.md section 10)
+from one ``assembly.Assembler`` per region of the model (the matrix
+cells, the fracture faces, and their lumped variants) plus the point terms
+of the wells.  The dofs that are not unknowns are ``constraints.Constraints``;
+the scaling is ``assembly.FieldScale`` per field:
+
+* unknowns x_hat = (x - offset)/scale, with the scales a scene gives;
+* residual rows divided by the mean |diagonal| of their field's Jacobian
+  rows at the initial state (``auto_residual_scales``), so that all rows
+  are O(1) and solver tolerances are dimensionless.
+"""
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import numpy as np
+from petsc4py import PETSc
+
+from . import compat
+from .assembly import Assembler, FieldScale
+from .constraints import Constraints, Dirichlet
+from .fields import Discretisation
+from .model import Model, PointTerm, Region
+
+
+class Problem:
+    """Fields, model (terms on the matrix cells, the fracture faces and at
+    well nodes), constraints and the state."""
+
+    def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
+                 dirichlet: list[Dirichlet], quad_degree: int | None = None):
+        self.disc, self.model, self.dm = disc, model, disc.mesh.dm
+        self.scales = scales
+        for t in disc.ties:
+            a, b = scales[t.field], scales[t.target]
+            if (a.scale, a.offset) != (b.scale, b.offset):
+                raise ValueError(f"tied fields {t.field} and {t.target} need the same unknown scaling")
+        self.inv_rscale = Assembler.default_inv_rscale(disc, scales)
+        self.assemblers = {r: Assembler(disc, model, scales, quad_degree, region=r,
+                                        inv_rscale=self.inv_rscale)
+                           for r in model.regions()}
+        self.points = [PointDofs(disc, pt) for pt in model.points]
+        self.X = self.dm.createGlobalVec()
+        self.X.setName("solution")
+        self.constraints = Constraints(disc, dirichlet, self.X)
+        self._Xl = self.dm.createLocalVec()
+        self._Xdl = self.dm.createLocalVec()
+        self._Fl = self.dm.createLocalVec()
+        lo, hi = disc.ownership_range()
+        # the owned rows' diagonal entries are in the pattern (zero where no term
+        # puts one, e.g. the contact rows), as MatDiagonalSet in SNES VI needs
+        self._diagonal = np.arange(lo, hi, dtype=compat.INT)
+        self.J: PETSc.Mat | None = None
+        self._ev_res = PETSc.Log.Event("thm.residual")
+        self._ev_jac = PETSc.Log.Event("thm.jacobian")
+
+    def region(self, region: Region) -> Assembler:
+        """The assembler of one region (for integrals and error norms)."""
+        return self.assemblers[region]
+
+    # -- local vectors with Dirichlet values -------------------------------------------
+    def local_arrays(self, X: PETSc.Vec, t: float, Xdot: PETSc.Vec | None = None):
+        """Local (scaled) solution and rate arrays with Dirichlet and tied values inserted."""
+        self.dm.globalToLocal(X, self._Xl, addv=PETSc.InsertMode.INSERT_VALUES)
+        xl = self._Xl.getArray()
+        xdl = self._Xdl.getArray()
+        self.constraints.tie_values(X, xl)
+        if Xdot is not None:
+            self.dm.globalToLocal(Xdot, self._Xdl, addv=PETSc.InsertMode.INSERT_VALUES)
+            self.constraints.tie_values(Xdot, xdl)
+        else:
+            xdl[:] = 0.0
+        self.constraints.insert(xl, xdl, t, self.scales)
+        return xl, xdl
+
+    def set_initial(self, funcs: dict[str, Callable[[np.ndarray], np.ndarray]]) -> None:
+        """Fill X from initial-value functions of the node coordinates (SI)."""
+        xl = self._Xl.getArray()
+        xl[:] = 0.0
+        for name, f in funcs.items():
+            sc = self.scales[name]
+            dofs = self.disc.field_local_dofs(name)
+            vals = np.asarray(f(self.disc.field_node_coordinates(name)), dtype=float)
+            xl[dofs] = (vals.reshape(dofs.shape) - sc.offset) / sc.scale
+        self.dm.localToGlobal(self._Xl, self.X, addv=PETSc.InsertMode.INSERT_VALUES)
+
+    def field_values(self, name: str, X: PETSc.Vec | None = None, t: float = 0.0):
+        """SI nodal values (n, ncomp) of a field on this rank's local nodes (ghosts included)."""
+        xl, _ = self.local_arrays(X or self.X, t)
+        sc = self.scales[name]
+        return xl[self.disc.field_local_dofs(name)] * sc.scale + sc.offset
+
+    def variable_bounds(self) -> tuple[PETSc.Vec, PETSc.Vec]:
+        """Global (scaled) lower and upper bounds of the unknowns from
+        ``model.bounds`` (everything else unbounded)."""
+        lo, hi = self.dm.createLocalVec(), self.dm.createLocalVec()
+        lo.set(PETSc.NINFINITY)
+        hi.set(PETSc.INFINITY)
+        for name, (a, b) in self.model.bounds.items():
+            sc, dofs = self.scales[name], self.disc.field_local_dofs(name)
+            if a is not None:
+                lo.getArray()[dofs] = (a - sc.offset) / sc.scale
+            if b is not None:
+                hi.getArray()[dofs] = (b - sc.offset) / sc.scale
+        XL, XU = self.dm.createGlobalVec(), self.dm.createGlobalVec()
+        self.dm.localToGlobal(lo, XL, addv=PETSc.InsertMode.INSERT_VALUES)
+        self.dm.localToGlobal(hi, XU, addv=PETSc.InsertMode.INSERT_VALUES)
+        return XL, XU
+
+    # -- fluxes through constraints and wells ----------------------------------------------
+    def reaction(self, rl: np.ndarray, fields, boundaries=None) -> float:
+        """Sum over ranks of the (SI) residual rows of Dirichlet-constrained
+        dofs of ``fields`` (on ``boundaries``, default all): the net inflow
+        through those boundaries (the variationally consistent flux)."""
+        idx = self.constraints.reaction_dofs(fields, boundaries)
+        acc = float(np.sum(rl[idx] / self.inv_rscale[idx]))
+        return self.dm.comm.tompi4py().allreduce(acc)
+
+    def dirichlet_boundaries(self, fields) -> list[str]:
+        return self.constraints.boundaries(fields)
+
+    def well_inflow(self, xl, t, field: str) -> tuple[float, float]:
+        """(net inflow, sum of |inflow| over the wells) (SI) into ``field``'s
+        equation from the well terms."""
+        net = tot = 0.0
+        for p in self.points:
+            if p.dofs and field in p.dofs:
+                q = -p.term.residual(p.values(xl, self.scales), t).get(field, 0.0)
+                net, tot = net + q, tot + abs(q)
+        return tuple(float(v) for v in self.dm.comm.tompi4py().allreduce(np.array([net, tot])))
+
+    # -- evaluation ------------------------------------------------------------------------
+    def local_residual(self, xl, xdl, t) -> np.ndarray:
+        """Scaled local residual of all regions and well terms (rows of every
+        local dof, constrained and tied ones included)."""
+        asm = list(self.assemblers.values())
+        r = asm[0].residual(xl, xdl, t)
+        for a in asm[1:]:
+            r += a.residual(xl, xdl, t)
+        for p in self.points:
+            p.add_residual(r, xl, t, self.scales, self.inv_rscale)
+        return r
+
+    def ifunction(self, ts, t, X, Xdot, F):
+        self._ev_res.begin()
+        xl, xdl = self.local_arrays(X, t, Xdot)
+        rl = self.local_residual(xl, xdl, t)
+        self._Fl.getArray()[:] = rl
+        F.zeroEntries()
+        self.dm.localToGlobal(self._Fl, F, addv=PETSc.InsertMode.ADD_VALUES)
+        self.constraints.tie_add(rl, F)
+        self._ev_res.end()
+
+    def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
+        vals = [a.jacobian_values(xl, xdl, t, shift) for a in self.assemblers.values()]
+        vals += [p.jacobian_values(xl, t, self.scales, self.inv_rscale) for p in self.points]
+        vals.append(np.zeros(len(self._diagonal)))
+        return np.concatenate(vals)
+
+    def ijacobian(self, ts, t, X, Xdot, shift, J, P):
+        self._ev_jac.begin()
+        xl, xdl = self.local_arrays(X, t, Xdot)
+        compat.coo_set_values(P, self.jacobian_values(xl, xdl, t, shift))
+        P.assemble()
+        if J != P:
+            J.assemble()
+        self._ev_jac.end()
+
+    def create_matrix(self) -> PETSc.Mat:
+        """The Jacobian matrix (created once, with its COO pattern)."""
+        if self.J is None:
+            asm = self.assemblers.values()
+            rows = [a.coo_rows for a in asm] + [p.coo_rows for p in self.points] + [self._diagonal]
+            cols = [a.coo_cols for a in asm] + [p.coo_cols for p in self.points] + [self._diagonal]
+            self.J = self.dm.createMat()
+            compat.coo_preallocate(self.J, np.concatenate(rows), np.concatenate(cols))
+        return self.J
+
+    # -- residual scaling --------------------------------------------------------------------
+    def auto_residual_scales(self, t: float, shift: float) -> dict[str, float]:
+        """Set each field's residual scale to the mean |diagonal| of its
+        Jacobian rows at the initial state, so that all rows are O(1)."""
+        J = self.create_matrix()
+        xl, xdl = self.local_arrays(self.X, t)
+        for sc in self.scales.values():
+            sc.rscale = 1.0
+        self._update_row_scales()
+        compat.coo_set_values(J, self.jacobian_values(xl, xdl, t, shift))
+        J.assemble()
+        diag = J.getDiagonal()
+        rowmax = None
+        names, isets, _ = self.dm.createFieldDecomposition()
+        out = {}
+        for name, iset in zip(names, isets):
+            d = diag.getSubVector(iset)
+            n = d.getSize()
+            mean = d.norm(PETSc.NormType.NORM_1) / max(n, 1)
+            diag.restoreSubVector(iset, d)
+            if mean == 0.0:              # a multiplier's rows (contact): their largest entries
+                rowmax = rowmax or _row_max_abs(J)
+                d = rowmax.getSubVector(iset)
+                mean = d.norm(PETSc.NormType.NORM_1) / max(n, 1)
+                rowmax.restoreSubVector(iset, d)
+            self.scales[name].rscale = mean if mean > 0 and math.isfinite(mean) else 1.0
+            out[name] = self.scales[name].rscale
+        self._update_row_scales()
+        return out
+
+    def _update_row_scales(self):
+        self.inv_rscale[:] = Assembler.default_inv_rscale(self.disc, self.scales)
+
+
+def _row_max_abs(J: PETSc.Mat) -> PETSc.Vec:
+    """max_j |J_ij| of every row, as a vector with J's row layout."""
+    ai, aj, av = J.getValuesCSR()
+    v = J.createVecLeft()
+    nz = np.diff(ai) > 0
+    out = np.zeros(len(ai) - 1)
+    if av.size:
+        out[nz] = np.maximum.reduceat(np.abs(av), ai[:-1][nz])
+    v.getArray()[:] = out
+    return v
+
+
+class PointDofs:
+    """A ``PointTerm`` located: the local dofs of its fields at the node, on the
+    rank that owns the node (other ranks hold it with no dofs)."""
+
+    def __init__(self, disc: Discretisation, term: PointTerm):
+        self.term = term
+        mesh = disc.mesh
+        f0 = term.fields[0]
+        pts = disc.support[f0]
+        X = mesh.point_coordinates(pts)
+        dist = np.linalg.norm(X - np.asarray(term.point)[None, :mesh.dim],
+                              axis=1) if len(pts) else np.zeros(0)
+        here = np.flatnonzero(dist < 1e-9 * max(float(mesh.h.max()) if mesh.ncells else 1.0, 1e-300))
+        lo, hi = disc.ownership_range()
+        self.dofs = {}
+        if len(here):
+            p = pts[here[0]]
+            dofs = {f: int(disc.offsets[f][p - disc.pstart]) for f in term.fields}
+            g = disc.global_index[dofs[f0]]
+            if lo <= g < hi:
+                self.dofs = dofs
+        found = mesh.dm.comm.tompi4py().allreduce(int(bool(self.dofs)))
+        if found != 1:
+            raise ValueError(f"well '{term.name}' at {tuple(term.point)}: no {f0} node there "
+                             "(wells must sit on a mesh vertex of the fracture)")
+        pairs = list(term.jacobian({f: 0.0 for f in term.fields}, 0.0).keys()) if self.dofs else []
+        self.pairs = pairs
+        g = disc.global_index
+        self.coo_rows = np.asarray([g[self.dofs[a]] for a, b in pairs], dtype=compat.INT)
+        self.coo_cols = np.asarray([g[self.dofs[b]] for a, b in pairs], dtype=compat.INT)
+
+    def values(self, xl, scales) -> dict:
+        return {f: xl[d] * scales[f].scale + scales[f].offset for f, d in self.dofs.items()}
+
+    def add_residual(self, r, xl, t, scales, inv_rscale):
+        if not self.dofs:
+            return
+        for f, v in self.term.residual(self.values(xl, scales), t).items():
+            r[self.dofs[f]] += v * inv_rscale[self.dofs[f]]
+
+    def jacobian_values(self, xl, t, scales, inv_rscale) -> np.ndarray:
+        if not self.dofs:
+            return np.zeros(0)
+        jac = self.term.jacobian(self.values(xl, scales), t)
+        return np.asarray([jac[(a, b)] * inv_rscale[self.dofs[a]] * scales[b].scale
+                           for a, b in self.pairs], dtype=float)

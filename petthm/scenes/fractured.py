@@ -1,0 +1,98 @@
+"""What the fracture flow and heat scenes share: the rigid-fracture physics
+(physics.md sections 4-7), the strip geometry, and a monitor of wells,
+balances and the fracture temperature's bounds.
+
+Fracture fields ``pf``, ``Tf`` live on the - faces of the cohesive cells;
+the matrix fields ``pm``, ``Tm`` on the split mesh.  The interface
+conditions pm = pf and (``equilibrium`` exchange) Tm = Tf on both faces are
+imposed by tying the matrix nodes on the walls to the fracture unknowns
+(docs/fracture.md).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import materials as mt
+from .. import meshing
+from ..builders import ModelBuilder
+from ..monitors import Balances, FractureWells, TemperatureRange, Worst, fracture_balances
+from ..params import CELSIUS
+from .base import Monitor
+
+
+#: the wells and initial state of the Scene 1 family (injector, producer, rock at 100 degC)
+SCENE1_WELLS = mt.group("Wells and initial state", mt.WELLS + ("initial_temperature", "initial_pressure"),
+                        initial_temperature=100.0)
+
+
+def rigid_fracture_physics(b: ModelBuilder, degree: int, *, heat: bool, permeability=None,
+                           matrix_storage: float = 0.0, matrix_thermal_storage: float = 0.0,
+                           rock_conductivity=None) -> None:
+    """pf (+ pm with a ``permeability`` tensor, + Tf and Tm with ``heat``) on a
+    fracture of fixed aperture ``-thm_fracture_aperture``."""
+    a = b.p.fracture_aperture
+    b.fracture_flow(degree, reference_aperture=a, heat=heat)
+    if permeability is not None:
+        b.matrix_flow(degree, permeability=permeability, storage=matrix_storage,
+                      thermal_storage=matrix_thermal_storage, heat=heat)
+        b.leakoff()
+    if heat:
+        b.fracture_heat(degree, reference_aperture=a)
+        b.matrix_heat(degree, conductivity=rock_conductivity)
+
+
+def transmissivity(p, aperture: float, T: float) -> float:
+    """a^3 / (12 mu(T)) of the fracture."""
+    return float(aperture ** 3 / (12 * p.fluid_viscosity.mu(T)))
+
+
+def balances_of(b: ModelBuilder, reference_aperture: float, p0: float, heat: bool, worst: Worst) -> Balances:
+    """The fluid volume (and energy) balances of a fracture model (stored
+    amounts relative to p0 and T0)."""
+    p = b.p
+    energy = (p.T0, p.fluid_rho_c, p.rho_c) if heat else None
+    return Balances(fracture_balances(b.flows, reference_aperture, p0, energy), worst)
+
+
+def far_sides(width: float, axis: int = 1):
+    """Boundary predicate of the two far sides x[axis] = 0 and 2 W of a strip."""
+    return lambda x: np.isclose(x[:, axis], 0.0) | np.isclose(x[:, axis], 2 * width)
+
+
+def strip_with_fracture(path, length, width, size, fracture_size):
+    """[0, L] x [0, 2W] with a fracture along y = W cutting both ends, graded toward it."""
+    fr = [meshing.Fracture("segment", p0=(0.0, width), p1=(length, width), size=fracture_size)]
+    return meshing.box_with_fractures(path, [length, 2 * width], size, fr, grading_distance=0.5 * width)
+
+
+class WellsMonitor(Monitor):
+    """Well histories, balances and (with heat) Tf's range against [Tinj, T0]."""
+
+    def __init__(self, wells: FractureWells | None, balances: Balances, worst: Worst,
+                 tf_range: TemperatureRange | None = None):
+        self.wells, self.balances, self.worst, self.tf_range = wells, balances, worst, tf_range
+
+    def __call__(self, problem, t, X=None) -> dict:
+        out = self.wells(problem, t, X) if self.wells is not None else {}
+        if self.tf_range is not None:
+            out.update(self.tf_range(problem, t, X))
+        out.update(self.balances(problem, t, X))
+        return out
+
+
+def tf_range(p, worst: Worst, warn_above=None, hint="") -> TemperatureRange:
+    return TemperatureRange("Tf", p.injection_temperature, p.initial_temperature, worst, warn_above, hint)
+
+
+def heat_wells_monitor(b: ModelBuilder, wells, reference_aperture: float | None = None, warn_above=None,
+                       hint: str = "") -> WellsMonitor:
+    """Wells, mass and energy balances and Tf's bounds of a fracture TH model
+    (the fracture's aperture, or the deformable fracture's initial one)."""
+    p, worst = b.p, Worst()
+    a = p.fracture_aperture if reference_aperture is None else reference_aperture
+    return WellsMonitor(wells, balances_of(b, a, p.initial_pressure, True, worst), worst,
+                        tf_range(p, worst, warn_above, hint))
+
+
+__all__ = ["rigid_fracture_physics", "transmissivity", "balances_of", "far_sides", "strip_with_fracture",
+           "WellsMonitor", "tf_range", "CELSIUS"]
