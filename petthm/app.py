@@ -77,6 +77,35 @@ def make_scene(name: str):
     return cls.read(run)
 
 
+#: the PETSc and petthm events whose count and time summary.json reports
+SOLVER_EVENTS = ("SNESSolve", "SNESJacobianEval", "KSPSolve", "PCSetUp", "PCApply", "thm.residual",
+                 "thm.jacobian")
+
+
+def solver_costs() -> dict:
+    """{event: {"count", "time" (s, the largest over ranks)}} of the solve stage."""
+    stage = PETSc.Log.Stage("solve")
+    comm = PETSc.COMM_WORLD.tompi4py()
+    out = {}
+    for name in SOLVER_EVENTS:
+        info = PETSc.Log.Event(name).getPerfInfo(stage)
+        out[name] = {"count": int(info["count"]), "time": comm.allreduce(float(info["time"]), op=_mpi_max())}
+    return out
+
+
+def peak_memory_mb() -> dict:
+    """Peak resident memory (MB): the largest rank's and the sum over ranks."""
+    import resource
+    mine = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0      # kB on Linux
+    comm = PETSc.COMM_WORLD.tompi4py()
+    return {"max_rank": comm.allreduce(mine, op=_mpi_max()), "total": comm.allreduce(mine)}
+
+
+def _mpi_max():
+    from mpi4py import MPI
+    return MPI.MAX
+
+
 def git_commit() -> str | None:
     """The petthm source's git commit (+ "-dirty" with uncommitted changes), or None."""
     import subprocess
@@ -111,6 +140,7 @@ class Run:
         self.t_start = time.perf_counter()
         self.mesh_path = run.mesh_file
         self.problem: Problem | None = None
+        PETSc.Log.begin()                   # event counts and times for summary.json's solver_costs
 
     # -- phases ----------------------------------------------------------------
     def _stage(self, name):
@@ -168,7 +198,8 @@ class Run:
                               dt_initial=run.dt_initial or td.dt_initial,
                               growth=run.dt_growth or td.dt_growth,
                               dt_max=run.dt_max or td.dt_max,
-                              hit_times=tuple(scene.hit_times()))
+                              hit_times=tuple(scene.hit_times()),
+                              pc_reuse=run.pc_reuse, pc_reuse_max_krylov=run.pc_reuse_max_krylov)
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
         propose_defaults(dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm)))
         self._pop("setup", st, t0)
@@ -260,6 +291,9 @@ class Run:
         stepper.destroy()
         self._pop("output", st, t0)
         summary["wall_time"] = dict(self.stage_wall, total=time.perf_counter() - self.t_start)
+        summary["solver_costs"] = solver_costs()
+        summary["peak_memory_mb"] = peak_memory_mb()
+        summary["pc_rebuilds_forced"] = stepper.reuse.rebuilds if stepper.reuse is not None else None
         write_summary(os.path.join(self.outdir, "summary.json"), summary, comm.rank)
         _say(comm, f"{status}: t = {t_final:.4e} s in {summary['steps']} steps "
              f"({summary['rejected_steps']} rejected), {summary['wall_time']['total']:.2f} s; "

@@ -66,6 +66,16 @@ def _cfunc(name: str, *argtypes):
     return fn
 
 
+def snes_lag_preconditioner(snes: PETSc.SNES, lag: int, persists: bool | None = None) -> None:
+    """SNESSetLagPreconditioner (-1: never rebuild, -2: rebuild once, then -1)
+    and SNESSetLagPreconditionerPersists (not wrapped by petsc4py 3.18-3.26)."""
+    fn = _cfunc("SNESSetLagPreconditioner", ctypes.c_void_p, _c_petscint)
+    _check(fn(snes.handle, lag), "SNESSetLagPreconditioner")
+    if persists is not None:
+        fn = _cfunc("SNESSetLagPreconditionerPersists", ctypes.c_void_p, ctypes.c_int)
+        _check(fn(snes.handle, int(bool(persists))), "SNESSetLagPreconditionerPersists")
+
+
 # --------------------------------------------------------------------------
 # Sections
 # --------------------------------------------------------------------------

@@ -187,3 +187,8 @@ class RunParams:
     dt_max: float = param(0.0, "s", "largest time step (0: scene default)", lo=0.0)
     output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0)
     quiet: bool = param(False, "-", "no per-step progress line")
+    pc_reuse: str = param("auto", "-", "reuse the preconditioner across Newton iterations and time "
+                          "steps, rebuilt when the extra Krylov iterations have cost a set-up or a step "
+                          "fails: on, off, or auto (on for a direct solve)", choices=("auto", "on", "off"))
+    pc_reuse_max_krylov: int = param(0, "-", "rebuild a reused preconditioner after a linear solve with "
+                                     "more iterations than this (0: the cost rule of -thm_pc_reuse)", lo=0)

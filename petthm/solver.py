@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 from petsc4py import PETSc
 
-from . import fieldsplit
+from . import compat, fieldsplit
 from .errors import InputError
 from .fieldsplit import VIFieldSplit  # noqa: F401  (-pc_python_type petthm.solver.VIFieldSplit)
 from .problem import Problem
@@ -82,6 +82,12 @@ class StepControl:
     growth: float = 1.0
     dt_max: float = math.inf
     hit_times: tuple = ()        # times to land on exactly
+    pc_reuse: str = "off"        # on, off, auto: on for a direct solve (PreconditionerReuse)
+    pc_reuse_max_krylov: int = 30
+
+
+#: preconditioners that are a direct solve (``-thm_pc_reuse auto`` reuses them)
+DIRECT_PCS = ("lu", "cholesky", "redundant")
 
 
 class TimeStepper:
@@ -107,9 +113,19 @@ class TimeStepper:
         ts.setFromOptions()                # -ts_max_step_rejections override)
         ts.setErrorIfStepFails(False)
         self.snes = ts.getSNES()
+        self.updates = SNESUpdates()
+        self.snes.setUpdate(self.updates)
         if problem.model.bounds:
             self._set_bounds(ts.getSNES())
-        self._set_field_splits(ts.getSNES().getKSP().getPC())
+        pc = ts.getSNES().getKSP().getPC()
+        self._set_field_splits(pc)
+        # a reused factorisation is an inexact solve: a Krylov method must correct it
+        krylov = ts.getSNES().getKSP().getType() != "preonly"
+        wanted = control.pc_reuse == "on" or (control.pc_reuse == "auto" and pc.getType() in DIRECT_PCS)
+        reuse = krylov and wanted
+        self.reuse = PreconditionerReuse(ts, control.pc_reuse_max_krylov) if reuse else None
+        if self.reuse is not None:
+            self.updates.hooks.append(self.reuse)
         ts.setPostStep(self._post_step)
         self._user_monitor = monitor
         ts.setMonitor(self._monitor)
@@ -137,7 +153,7 @@ class TimeStepper:
                              f"{', '.join(self.problem.model.bounds)}: use vinewtonrsls or vinewtonssls")
         lower, upper = self.problem.variable_bounds()
         snes.setVariableBounds(lower, upper)
-        snes.setUpdate(BiactiveRelease(lower))
+        self.updates.hooks.append(BiactiveRelease(lower))
 
     def _post_step(self, ts):
         """Grow the step, clipped to the largest step and to the final time."""
@@ -195,6 +211,83 @@ class TimeStepper:
         self.snes = None
         gc.collect()
         PETSc.garbage_cleanup(comm)
+
+
+class SNESUpdates:
+    """The SNES update hook (called at the start of every Newton iteration):
+    the hooks of the VI release and of the preconditioner reuse, in order."""
+
+    def __init__(self):
+        self.hooks: list = []
+
+    def __call__(self, snes, it):
+        for hook in self.hooks:
+            hook(snes, it)
+
+
+class PreconditionerReuse:
+    """Keep the preconditioner (above all an LU factorisation) across Newton
+    iterations and time steps (``-thm_pc_reuse``): the Jacobian changes with
+    the state and the step, and GMRES preconditioned by the older
+    factorisation corrects that, for a fraction of a new factorisation's
+    cost.  It is rebuilt at the next Newton iteration
+
+    * with ``max_krylov`` = 0 (the default), when the Krylov iterations the
+      reuse has added since the last set-up (each solve's iterations above
+      the first solve's after it, at the measured time per iteration) have
+      cost as much as that set-up did: a rule without a tuned constant that
+      never spends more than twice the best of the two choices;
+    * with ``max_krylov`` > 0, when the last linear solve needed more
+      iterations than that;
+
+    and always when a linear solve failed or a step is tried again after a
+    failed solve.  The VI Newton method RSLS rebuilds it anyway when the
+    active set changes."""
+
+    def __init__(self, ts: PETSc.TS, max_krylov: int = 0):
+        self.ts, self.max_krylov = ts, max_krylov
+        self.step_start = None
+        self.rebuilds = 0
+        self._setups = PETSc.Log.Event("PCSetUp")
+        self._solves = PETSc.Log.Event("KSPSolve")
+        self._seen = (0, 0.0, 0.0)              # PCSetUp count and time, KSPSolve time at the last call
+        self.setup_cost = 0.0                   # seconds of the last set-up
+        self.base_its = None                    # iterations of the first solve after it
+        self.extra = 0.0                        # seconds the reuse has added since
+        compat.snes_lag_preconditioner(ts.getSNES(), -1, persists=True)
+
+    def _last_solve(self, ksp) -> tuple[int, float]:
+        """(iterations, seconds) of the last linear solve; notes a new set-up."""
+        setup, solve = self._setups.getPerfInfo(), self._solves.getPerfInfo()
+        count, t_setup, t_solve = int(setup["count"]), float(setup["time"]), float(solve["time"])
+        if count > self._seen[0]:                                   # a set-up since the last call
+            self.setup_cost = t_setup - self._seen[1]
+            self.base_its, self.extra = None, 0.0
+        seconds = t_solve - self._seen[2]
+        self._seen = (count, t_setup, t_solve)
+        return ksp.getIterationNumber(), seconds
+
+    def _costly(self, its: int, seconds: float) -> bool:
+        if self.max_krylov > 0:
+            return its > self.max_krylov
+        if its == 0:
+            return False
+        if self.base_its is None:
+            self.base_its = its
+        self.extra += max(its - self.base_its, 0) * seconds / its
+        return self.extra > self.setup_cost
+
+    def __call__(self, snes, it):
+        ksp = snes.getKSP()
+        its, seconds = self._last_solve(ksp)
+        rebuild = ksp.getConvergedReason() < 0 or self._costly(its, seconds)
+        if it == 0:
+            t = self.ts.getTime()
+            rebuild = rebuild or t == self.step_start        # the same step again: its solve failed
+            self.step_start = t
+        if rebuild:
+            compat.snes_lag_preconditioner(snes, -2)      # rebuild once, then reuse again
+            self.rebuilds += 1
 
 
 class BiactiveRelease:
