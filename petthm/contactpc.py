@@ -41,6 +41,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from . import compat
+from .fieldsplit import orthonormal_nullspace, rigid_modes
 
 
 @dataclass
@@ -245,22 +246,13 @@ class ContactNullspacePC:
         pos = np.searchsorted(lay.u, urows)
         x = lay.u_coords[pos] - lay.u_coords.mean(axis=0)
         comp = lay.u_comp[pos]
-        d = x.shape[1]
-        modes = [np.asarray(comp == k, dtype=float) for k in range(d)]
-        for a, b in ([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):
-            modes.append(np.where(comp == a, -x[:, b], 0.0) + np.where(comp == b, x[:, a], 0.0))
         r, vecs = self.Z.createVecLeft(), []
-        for m in modes:
+        for m in rigid_modes(comp, x):
             r.getArray()[:] = m
             v = self.Z.createVecRight()
             self.Z.multTranspose(r, v)
-            for w in vecs:                                             # modified Gram-Schmidt
-                v.axpy(-v.dot(w), w)
-            nv = v.norm()
-            if nv > 1e-12:
-                v.scale(1.0 / nv)
-                vecs.append(v)
-        return PETSc.NullSpace().create(vectors=vecs, comm=PETSc.COMM_SELF)
+            vecs.append(v)
+        return orthonormal_nullspace(vecs, PETSc.COMM_SELF)
 
     def _set_inner(self, pc, AZ):
         if self.ksp is None:

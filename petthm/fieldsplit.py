@@ -66,23 +66,38 @@ def rigid_body_modes(problem, iset: PETSc.IS, space: np.ndarray | None = None,
     rows = np.searchsorted(iset.getIndices(), target)
     comp = np.broadcast_to(np.arange(d), dofs.shape)[own]
     xs = np.broadcast_to(x[:, None, :], dofs.shape + (d,))[own]
-    modes = [np.asarray(comp == k, dtype=float) for k in range(d)]
-    rot = [(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]
-    for a, b in rot:                                              # rotation in the (a, b) plane
-        modes.append(np.where(comp == a, -xs[:, b], 0.0) + np.where(comp == b, xs[:, a], 0.0))
-    vecs = []
     n = iset.getLocalSize()
     comm = problem.dm.comm
-    for m in modes:
+    vecs = []
+    for m in rigid_modes(comp, xs):
         v = PETSc.Vec().createMPI((n, PETSc.DECIDE), comm=comm)
         v.getArray()[rows] = m
-        for w in vecs:                                            # modified Gram-Schmidt
+        vecs.append(v)
+    return orthonormal_nullspace(vecs, comm)
+
+
+def rigid_modes(comp: np.ndarray, x: np.ndarray) -> list[np.ndarray]:
+    """Translations and rotations of displacement unknowns of components
+    ``comp`` at points ``x`` (one row per unknown)."""
+    d = x.shape[1]
+    modes = [np.asarray(comp == k, dtype=float) for k in range(d)]
+    for a, b in ([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):    # rotation in the (a, b) plane
+        modes.append(np.where(comp == a, -x[:, b], 0.0) + np.where(comp == b, x[:, a], 0.0))
+    return modes
+
+
+def orthonormal_nullspace(vecs: list, comm) -> PETSc.NullSpace:
+    """A MatNullSpace of the vectors, orthonormalised (modified Gram-Schmidt;
+    dependent ones dropped)."""
+    out = []
+    for v in vecs:
+        for w in out:
             v.axpy(-v.dot(w), w)
         nv = v.norm()
         if nv > 1e-12:
             v.scale(1.0 / nv)
-            vecs.append(v)
-    return PETSc.NullSpace().create(vectors=vecs, comm=comm)
+            out.append(v)
+    return PETSc.NullSpace().create(vectors=out, comm=comm)
 
 
 def _space_offset(dm, space: np.ndarray) -> int:
