@@ -285,6 +285,9 @@ class PreconditionerReuse:
             t = self.ts.getTime()
             rebuild = rebuild or t == self.step_start        # the same step again: its solve failed
             self.step_start = t
+        # the set-up is collective: every rank decides as the one that wants it most
+        # (each measures its own times)
+        rebuild = snes.comm.tompi4py().allreduce(bool(rebuild), op=_mpi_lor())
         if rebuild:
             compat.snes_lag_preconditioner(snes, -2)      # rebuild once, then reuse again
             self.rebuilds += 1
@@ -320,6 +323,11 @@ class BiactiveRelease:
                 f[trapped] = np.maximum(f[trapped], 1e-300)
         X.copy(self.previous)
         self.has_previous = True
+
+
+def _mpi_lor():
+    from mpi4py import MPI
+    return MPI.LOR
 
 
 def _abort_all(comm, message: str) -> None:
