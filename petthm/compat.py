@@ -76,6 +76,12 @@ def snes_lag_preconditioner(snes: PETSc.SNES, lag: int, persists: bool | None = 
         _check(fn(snes.handle, int(bool(persists))), "SNESSetLagPreconditionerPersists")
 
 
+def ptap(A: PETSc.Mat, P: PETSc.Mat) -> PETSc.Mat:
+    """P^T A P (petsc4py 3.18: ``Mat.PtAP``; renamed ``Mat.ptap`` later)."""
+    fn = getattr(A, "ptap", None) or getattr(A, "PtAP")
+    return fn(P)
+
+
 # --------------------------------------------------------------------------
 # Sections
 # --------------------------------------------------------------------------

@@ -180,7 +180,7 @@ class ContactNullspacePC:
         self.glued |= np.abs(D) <= 1e-12 * scale
         self.diag = np.where(D != 0.0, D, 1.0)
         self.Z = self._basis(len(urows))
-        AZ = self.A.PtAP(self.Z)
+        AZ = compat.ptap(self.A, self.Z)
         AZ.setNearNullSpace(self._rigid_modes(lay, urows))
         self._set_inner(pc, AZ)
         self.r_u = self.A.createVecLeft()
