@@ -1,37 +1,44 @@
 """A null-space preconditioner for frictionless contact: the {u, lam} block
 
     K = [ A  C ]      A: elasticity (u rows), C: the face loads of lam,
-        [ B  0 ]      B: the weak opening of the closed nodes (lam rows)
+        [ B  D ]      B: the weak opening of the closed nodes (lam rows),
+                      D: 0 on closed rows (the semismooth row of an open
+                      node of ``vinewtonssls`` is nearly lam = 0 instead)
 
 of the VI reduced system (physics.md section 3; kernels/contact.py).
 
-A closed node i holds the normal opening at zero: the constraint glues the
-normal displacement of its two copies u+_i, u-_i.  With the lumped
-(nodal) weights b_i+ = sum_k B[i, u+_k . n], b_i- (and c_i+-, the same
-sums of the lam column of C), the preconditioner solves
+A closed ("glued") node i holds the normal opening at zero: the constraint
+glues the normal displacement of its two copies u+_i, u-_i.  With the pair
+matrix P (column i: +n_i on the components of u+_i, -n_i on those of u-_i)
+and the lumped (nodal) weights b = B P 1 and c = C^T P 1 of the weak
+opening and of the face load, the preconditioner solves
 
-    1. u_p: the normal jump that B u = r_lam asks for, split evenly
-       between the faces (u_p+- = +- r_lam,i / (b_i+ - b_i-) n);
+    1. u_p = P (r_lam / b): the normal jump the lam rows ask for, split
+       evenly between the faces;
     2. A_Z v = Z^T (r_u - A u_p), with Z the orthonormal basis of the
-       displacements that keep every closed node glued (the tangential
-       components of each copy, and one shared normal component): A_Z =
+       displacements that keep every glued node glued (the tangential
+       components of each copy and one shared normal component): A_Z =
        Z^T A Z is the elasticity of the body glued along its closed
-       fracture parts, for algebraic multigrid (GAMG, the rigid-body modes
-       Z^T r) like any elasticity matrix; u = Z v + u_p;
-    3. lam_i from the normal force the glue carries:
-       lam_i = [(r_u - A u)_i+ - (r_u - A u)_i-] . n / (c_i+ - c_i-).
+       fracture parts, for algebraic multigrid (GAMG, with the rigid-body
+       modes Z^T r) like any elasticity matrix; u = Z v + u_p;
+    3. lam = (P^T (r_u - A u)) / c: the normal force the glue carries.
 
 With B and C exact nodal (lumped) operators and an exact A_Z solve this is
 the null-space method, an exact solve; with the consistent weak opening it
 is spectrally equivalent to it with constants independent of the mesh
 (lumped against consistent mass), so the outer Krylov count does not grow
 under refinement.  Rows of lam that do not couple to u (an open node on the
-full space of ``vinewtonssls``: its semismooth row is nearly lam = 0) are
-solved by their diagonal and not glued.
+full space of ``vinewtonssls``) are solved by their diagonal and not glued.
 
-The PC gets its structure (which rows are lam, which u rows are the two
-copies of a fracture vertex, the normals) from ``layout``: a ``ContactLayout``
-in the numbering of the operator it preconditions.
+Everything is a parallel PETSc matrix or vector operation: the pairs are
+listed once per problem in its global numbering (``ContactStructure``) and
+restricted to the rows of the operator at every set-up (``glue_maps``); the
+normals come from the weak opening B itself (the sum of a lam row's
++ face entries per component is the area-weighted normal around the node),
+so every rank sees the same normal.  The lam-recovery map G = diag(1/c) P^T
+also gives the Schur complement of the flow and heat fields
+(``fieldsplit.VIFieldSplit``): a fluid pressure on a closed fracture is
+carried by the glue (lam changes by -p, u does not move).
 """
 from __future__ import annotations
 
@@ -41,73 +48,273 @@ import numpy as np
 from petsc4py import PETSc
 
 from . import compat
-from .fieldsplit import orthonormal_nullspace, rigid_modes
+from .fieldsplit import orthonormal_nullspace, restricted_modes, served_rows
+
+#: a glued node: |b| above this fraction of the largest |D| (``glue_maps``)
+GLUE_RATIO = 1e-8
 
 
 @dataclass
-class ContactLayout:
-    """The {u, lam} structure of an operator, in its row numbering (this
-    rank's rows; serial for now).  ``lam``: rows of the lam unknowns (n,);
-    ``plus``, ``minus``: the u rows of the two copies of the same vertex
-    (n, d); ``normal``: its unit normal (n, d); ``u``: every u row (sorted),
-    ``u_coords`` its node's coordinates and ``u_comp`` its component (for
-    the rigid-body modes)."""
-    lam: np.ndarray
-    plus: np.ndarray
-    minus: np.ndarray
-    normal: np.ndarray
+class ContactStructure:
+    """The {u, lam} pairs of a problem in its global numbering: ``pairs``
+    (N x N): row lam_i, columns u+-_i (each free component), value
+    side * (component + 1), side = +1 on the + copy and -1 on the - copy;
+    ``u``, ``lam``: this rank's (sorted) global unknowns of the two fields."""
+    pairs: PETSc.Mat
     u: np.ndarray
-    u_coords: np.ndarray
-    u_comp: np.ndarray
+    lam: np.ndarray
+
+    def destroy(self) -> None:
+        self.pairs.destroy()
 
 
-def layout_of(problem, space: np.ndarray | None = None) -> ContactLayout:
-    """The contact layout of a problem's (reduced) system: global rows, or
-    positions in ``space`` (the sorted unknowns of a VI reduced system);
-    vertices whose lam is not an unknown there (tip, open nodes of RSLS)
-    are left out."""
+def contact_structure(problem) -> ContactStructure:
+    """List every (lam, u+, u-) of the fracture vertices that are split (not
+    the tip).  A pair seen by several ranks (ghost cohesive cells) is
+    entered by each of them and divided by the number of ranks that did."""
     from .model import Domain
     disc = problem.disc
     surf = disc.regions[Domain.FRACTURE]
     g = disc.global_index
-    pairs = np.unique(np.column_stack([surf.cell_vertices.ravel(), surf.plus_vertices.ravel()]), axis=0)
-    pairs = pairs[pairs[:, 0] != pairs[:, 1]]                       # tip vertices are not split
-    pts = pairs + surf.vstart - disc.pstart
-    lam = g[disc.offsets["lam"][pts[:, 0]]]
     d = disc.mesh.dim
-    minus = g[disc.offsets["u"][pts[:, 0]][:, None] + np.arange(d)]
-    plus = g[disc.offsets["u"][pts[:, 1]][:, None] + np.arange(d)]
-    normal = _vertex_normals(surf, pairs[:, 0])
-    keep = lam >= 0
-    udofs = disc.field_local_dofs("u")                                # (nodes, d)
-    ug = g[udofs]
-    xyz = np.broadcast_to(disc.field_node_coordinates("u")[:, None, :], udofs.shape + (d,))
-    comp = np.broadcast_to(np.arange(d), udofs.shape)
-    ok = ug >= 0
-    u, first = np.unique(ug[ok], return_index=True)
-    u_coords, u_comp = xyz[ok][first], comp[ok][first]
-    lam, minus, plus, normal = lam[keep], minus[keep], plus[keep], normal[keep]
-    if space is not None:
-        inside = np.isin(lam, space)
-        lam, minus, plus, normal = lam[inside], minus[inside], plus[inside], normal[inside]
-        lam = np.searchsorted(space, lam)
-        minus, plus = (np.where(a >= 0, np.searchsorted(space, a), -1) for a in (minus, plus))
-        inu = np.isin(u, space)
-        u, u_coords, u_comp = np.searchsorted(space, u[inu]), u_coords[inu], u_comp[inu]
-    return ContactLayout(lam.astype(compat.INT), plus.astype(compat.INT), minus.astype(compat.INT), normal,
-                         u.astype(compat.INT), u_coords, u_comp)
+    verts = np.unique(np.column_stack([surf.cell_vertices.ravel(), surf.plus_vertices.ravel()]), axis=0)
+    verts = verts[verts[:, 0] != verts[:, 1]]
+    pts = verts + surf.vstart - disc.pstart
+    lam = g[disc.offsets["lam"][pts[:, 0]]]
+    comps = np.arange(d)
+    u = np.concatenate([g[disc.offsets["u"][pts[:, 1]][:, None] + comps],
+                        g[disc.offsets["u"][pts[:, 0]][:, None] + comps]], axis=1)         # (n, 2d)
+    code = np.concatenate([comps + 1, -(comps + 1)]).astype(float)
+    rows = np.repeat(lam, 2 * d)
+    ok = (rows >= 0) & (u.ravel() >= 0)
+    comm = problem.dm.comm
+    n, N = problem.X.getSizes()
+    count = problem.X.duplicate()
+    count.set(0.0)
+    listed = lam[lam >= 0]
+    count.setValues(listed.astype(compat.INT), np.ones(len(listed)), addv=PETSc.InsertMode.ADD_VALUES)
+    count.assemble()
+    pairs = _coo_matrix(rows[ok], u.ravel()[ok], np.tile(code, len(lam))[ok], (n, N), (n, N), comm)
+    c = count.getArray()
+    count.getArray()[:] = np.where(c > 0, 1.0 / np.maximum(c, 1.0), 1.0)
+    pairs.diagonalScale(L=count)
+    count.destroy()
+    names, isets, _ = problem.dm.createFieldDecomposition()
+    fields = {name: iset.getIndices().copy() for name, iset in zip(names, isets)}
+    return ContactStructure(pairs, fields["u"], fields["lam"])
 
 
-def _vertex_normals(surf, verts: np.ndarray) -> np.ndarray:
-    """The mean unit normal of the faces around each - vertex."""
-    n = np.zeros((len(verts), surf.dim))
-    pos = {int(v): k for k, v in enumerate(verts)}
-    for f, cv in enumerate(surf.cell_vertices):
-        for v in cv:
-            k = pos.get(int(v))
-            if k is not None:
-                n[k] += surf.normals[f]
+def _coo_matrix(rows, cols, vals, row_sizes, col_sizes, comm) -> PETSc.Mat:
+    """A parallel AIJ matrix from global (row, col, value) triplets, entries
+    of other ranks' rows included; repeated entries are summed."""
+    M = PETSc.Mat().create(comm=comm)
+    M.setSizes((row_sizes, col_sizes))
+    M.setType(PETSc.Mat.Type.AIJ)
+    compat.coo_preallocate(M, np.asarray(rows, dtype=compat.INT), np.asarray(cols, dtype=compat.INT))
+    compat.coo_set_values(M, np.asarray(vals, dtype=float))
+    return M
+
+
+def _index_set(idx: np.ndarray, comm) -> PETSc.IS:
+    return PETSc.IS().createGeneral(np.ascontiguousarray(idx, dtype=compat.INT), comm=comm)
+
+
+@dataclass
+class GlueMaps:
+    """The contact structure of one operator K (rows ``rows`` of the full
+    system, in K's order): ``iu``, ``ilam`` the u and lam rows of K (in K's
+    numbering), ``u_full`` the full-system index of each u row; ``pt``
+    (lam x u): +n_i on u+_i, -n_i on u-_i (the transpose of the pair matrix
+    P); ``glued`` (0/1), ``b``, ``c``, ``diag`` (D) lam vectors; ``code``
+    (u vector): side * (component + 1) of a paired u row, 0 elsewhere."""
+    iu: PETSc.IS
+    ilam: PETSc.IS
+    u_full: np.ndarray
+    st: PETSc.Mat
+    pt: PETSc.Mat
+    glued: PETSc.Vec
+    b: PETSc.Vec
+    c: PETSc.Vec
+    diag: PETSc.Vec
+    code: PETSc.Vec
+
+    def recovery(self) -> PETSc.Mat:
+        """G = diag(glued / c) P^T (lam x u): lam from the normal force the
+        glue carries (step 3 of the module docstring)."""
+        G = self.pt.copy()
+        s, c = self.glued.duplicate(), _nonzero(self.c)
+        s.pointwiseDivide(self.glued, c)
+        G.diagonalScale(L=s)
+        s.destroy()
+        c.destroy()
+        return G
+
+    def destroy(self) -> None:
+        for obj in (self.iu, self.ilam, self.st, self.pt, self.glued, self.b, self.c, self.diag, self.code):
+            obj.destroy()
+
+
+def _nonzero(v: PETSc.Vec) -> PETSc.Vec:
+    """A copy of ``v`` with its zeros replaced by ones (safe divisor)."""
+    w = v.copy()
+    a = w.getArray()
+    a[a == 0.0] = 1.0
+    return w
+
+
+def glue_maps(K: PETSc.Mat, structure: ContactStructure, rows: np.ndarray) -> GlueMaps:
+    """``GlueMaps`` of the operator K whose owned rows are the full-system
+    unknowns ``rows`` (sorted)."""
+    comm = K.getComm()
+    r0 = K.getOwnershipRange()[0]
+    is_u, is_lam = np.isin(rows, structure.u), np.isin(rows, structure.lam)
+    iu = _index_set(np.flatnonzero(is_u) + r0, comm)
+    ilam = _index_set(np.flatnonzero(is_lam) + r0, comm)
+    st = structure.pairs.createSubMatrix(_index_set(rows[is_lam], comm), _index_set(rows[is_u], comm))
+    B = K.createSubMatrix(ilam, iu)
+    ones = st.createVecLeft()
+    ones.set(1.0)
+    code = st.createVecRight()
+    st.multTranspose(ones, code)                               # side * (comp + 1) of each paired u row
+    normal = _normals_from_opening(B, code)                    # (m, d) unit normals, from B
+    pt = _signed_normals(st, normal)
+    w = pt.createVecRight()
+    pt.multTranspose(ones, w)                                  # side * n of each paired u row
+    b = B.createVecLeft()
+    B.mult(w, b)
+    C = K.createSubMatrix(iu, ilam)
+    c = C.createVecRight()
+    C.multTranspose(w, c)
+    D = K.createSubMatrix(ilam, ilam)
+    diag = D.getDiagonal()
+    big = comm.tompi4py().allreduce(float(np.abs(diag.getArray()).max(initial=0.0)), op=_mpi_max())
+    ba, da = np.abs(b.getArray()), np.abs(diag.getArray())
+    glued = b.duplicate()
+    glue = (ba > GLUE_RATIO * max(big, 1e-300)) | ((da <= 1e-12 * ba) & (ba > 0))
+    glued.getArray()[:] = glue.astype(float)
+    for obj in (B, C, D, ones, w):
+        obj.destroy()
+    return GlueMaps(iu, ilam, rows[is_u].copy(), st, pt, glued, b, c, diag, code)
+
+
+def _normals_from_opening(B: PETSc.Mat, code: PETSc.Vec) -> np.ndarray:
+    """Unit normal at each lam row: the sum of the row's entries on the +
+    copy's component k minus those on the - copy's, for each k (the weak
+    opening int mu (u+ - u-) . n: its + entries are int mu phi n_k)."""
+    cd = code.getArray(readonly=True)
+    d = int(np.abs(cd).max(initial=0.0))
+    d = B.getComm().tompi4py().allreduce(d, op=_mpi_max())
+    ind = code.duplicate()
+    out = B.createVecLeft()
+    n = np.zeros((B.getLocalSize()[0], d))
+    for k in range(d):
+        ind.getArray()[:] = (cd == k + 1).astype(float) - (cd == -(k + 1)).astype(float)
+        B.mult(ind, out)
+        n[:, k] = out.getArray(readonly=True)
+    ind.destroy()
+    out.destroy()
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+def _signed_normals(st: PETSc.Mat, normal: np.ndarray) -> PETSc.Mat:
+    """P^T: the pair listing with side * (comp + 1) replaced by side * n_comp."""
+    ai, aj, av = st.getValuesCSR()
+    row = np.repeat(np.arange(len(ai) - 1), np.diff(ai))
+    comp = np.rint(np.abs(av)).astype(int) - 1
+    vals = np.sign(av) * normal[row, comp] if len(av) else av
+    pt = PETSc.Mat().createAIJ(st.getSizes(), csr=(ai, aj, vals), comm=st.getComm())
+    pt.assemble()
+    return pt
+
+
+def glued_basis(maps: GlueMaps, A: PETSc.Mat) -> PETSc.Mat:
+    """Z (u x v, orthonormal columns): the displacements that keep every
+    glued node glued.  A u row that no glued node holds is a column of its
+    own; a glued pair with all 2d components free gets the tangential
+    components of each copy and one shared normal component; a pair with
+    fixed components (a symmetry plane) an orthonormal basis of the null
+    space of its constraint n . (u+ - u-) over its free components."""
+    comm = A.getComm()
+    r0, r1 = A.getOwnershipRange()
+    held = maps.code.duplicate()
+    ones = _pattern(maps.st)
+    ones.multTranspose(maps.glued, held)                       # > 0 where a glued node holds the row
+    free = np.flatnonzero(held.getArray(readonly=True) == 0.0) + r0
+    ones.destroy()
+    held.destroy()
+    ai, aj, codes = maps.st.getValuesCSR()
+    codes = np.rint(codes).astype(int)
+    vals = maps.pt.getValuesCSR()[2]
+    g = np.flatnonzero(maps.glued.getArray(readonly=True) > 0)
+    rows, cols, out = [free], [np.arange(len(free))], [np.ones(len(free))]
+    ncol = len(free)
+    for sel, order in _patterns(ai, codes, g):
+        idx = ai[sel][:, None] + order                         # (k, nf) CSR positions, + copy first
+        signed = vals[idx]
+        constrains = np.linalg.norm(signed, axis=1) > 1e-12
+        for part in (constrains, ~constrains):
+            if not part.any():
+                continue
+            v = _pair_basis(signed[part], codes[idx[0]]) if part is constrains else \
+                np.broadcast_to(np.eye(idx.shape[1]), (int(part.sum()),) + (idx.shape[1],) * 2)
+            k, nb, nf = v.shape
+            c = ncol + np.arange(k * nb).reshape(k, nb)
+            ncol += k * nb
+            rows.append(np.broadcast_to(aj[idx[part]][:, None, :], v.shape).ravel())
+            cols.append(np.broadcast_to(c[:, :, None], v.shape).ravel())
+            out.append(v.ravel())
+    start = comm.tompi4py().exscan(ncol) or 0
+    r, c, v = (np.concatenate(a) for a in (rows, cols, out))
+    keep = v != 0.0
+    return _coo_matrix(r[keep], c[keep] + start, v[keep], (r1 - r0, PETSc.DECIDE), (ncol, PETSc.DECIDE), comm)
+
+
+def _pattern(M: PETSc.Mat) -> PETSc.Mat:
+    """The nonzero pattern of M with ones."""
+    ai, aj, _ = M.getValuesCSR()
+    out = PETSc.Mat().createAIJ(M.getSizes(), csr=(ai, aj, np.ones(len(aj))), comm=M.getComm())
+    out.assemble()
+    return out
+
+
+def _patterns(ai, codes, rows) -> list:
+    """The glued lam rows grouped by the codes of their entries (which
+    components of which copy are unknowns), each with the order of its
+    entries that puts the + copy first, components ascending:
+    [(rows, order (k, nf)), ...]."""
+    out = []
+    if not len(rows):
+        return out
+    lengths = np.diff(ai)[rows]
+    for n in np.unique(lengths):
+        sel = rows[lengths == n]
+        mat = codes[ai[sel][:, None] + np.arange(n)]
+        order = np.argsort(np.where(mat > 0, mat, 10 - mat), axis=1)
+        keys = np.take_along_axis(mat, order, axis=1)
+        _, inv = np.unique(keys, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        for j in range(inv.max() + 1):
+            out.append((sel[inv == j], order[inv == j]))
+    return out
+
+
+def _pair_basis(signed: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """Orthonormal bases (k, nb, nf) of the glued displacements of k pairs
+    whose entries (+ copy first) have the constraint coefficients
+    ``signed`` (k, nf): side * n_comp."""
+    k, nf = signed.shape
+    d = int(np.abs(codes).max())
+    if nf == 2 * d:                                            # a whole pair
+        n = signed[:, :d]
+        t = _tangents(n)                                       # (k, d-1, d)
+        v = np.zeros((k, 2 * d - 1, nf))
+        v[:, :d - 1, :d] = t
+        v[:, d - 1:2 * d - 2, d:] = t
+        v[:, -1, :d] = n / np.sqrt(2.0)
+        v[:, -1, d:] = n / np.sqrt(2.0)
+        return v
+    # fixed components: the null space of the (nonzero) constraint row
+    return np.linalg.svd(signed[:, None, :])[2][:, 1:]          # row 0 of V^T is along the constraint
 
 
 def _tangents(n: np.ndarray) -> np.ndarray:
@@ -122,141 +329,65 @@ def _tangents(n: np.ndarray) -> np.ndarray:
     return np.stack([t1, t2], axis=1)
 
 
+def _mpi_max():
+    from mpi4py import MPI
+    return MPI.MAX
+
+
 class ContactNullspacePC:
     """``-pc_type python -pc_python_type petthm.contactpc.ContactNullspacePC``
-    with the layout set by ``serve`` (see the module docstring).  The A_Z
-    solve takes the options prefix ``contact_`` (default: one GAMG V-cycle:
+    for the {u, lam} block of a contact scene (see the module docstring): the
+    whole system of a scene with u and lam only, or the {u, lam} split of
+    ``fieldsplit.VIFieldSplit`` (a split with u alone, in a scene without
+    contact, is solved by the inner solve with u's rigid-body modes).  The
+    glued elasticity solve A_Z takes the options prefix ``<prefix>contact_``
+    (default: one GAMG V-cycle with the glued body's rigid-body modes:
     ``-contact_ksp_type preonly -contact_pc_type gamg``)."""
 
-    def __init__(self, layout: ContactLayout | None = None):
-        self.layout = layout
-        self.ksp = None
+    def __init__(self):
+        self.maps = self.A = self.Z = self.ksp = None
+        self._own_maps = False
+        self._work: dict = {}
 
     def setUp(self, pc):
-        K, _ = pc.getOperators()
-        if K.getComm().getSize() > 1:
-            raise NotImplementedError("ContactNullspacePC runs on one rank so far (docs/solvers.md)")
-        lay = self.layout if self.layout is not None else pc.getAttr("petthm_contact_layout")
-        if lay is None:
-            raise RuntimeError("ContactNullspacePC needs a ContactLayout")
-        n = K.getSize()[0]
-        is_lam = np.zeros(n, dtype=bool)
-        is_lam[lay.lam] = True
-        urows = np.flatnonzero(~is_lam).astype(compat.INT)
-        self.urows, self.lamrows = urows, lay.lam
-        u_is = PETSc.IS().createGeneral(urows, comm=PETSc.COMM_SELF)
-        lam_is = PETSc.IS().createGeneral(lay.lam, comm=PETSc.COMM_SELF)
-        self.A = K.createSubMatrix(u_is, u_is)
-        B = K.createSubMatrix(lam_is, u_is)
-        C = K.createSubMatrix(u_is, lam_is)
-        D = K.createSubMatrix(lam_is, lam_is).getDiagonal().getArray().copy()
-        pos = np.full(n, -1, dtype=compat.INT)
-        pos[urows] = np.arange(len(urows))
-        # (m, d) in the u numbering; -1: a fixed component (not an unknown)
-        plus = np.where(lay.plus >= 0, pos[np.maximum(lay.plus, 0)], -1)
-        minus = np.where(lay.minus >= 0, pos[np.maximum(lay.minus, 0)], -1)
-        self.plus, self.minus, self.normal = plus, minus, lay.normal
-        m = len(lay.lam)
-        side = np.zeros(len(urows))
-        nrm = np.zeros(len(urows))
-        for rows, sign in ((plus, 1.0), (minus, -1.0)):
-            ok = rows >= 0
-            side[rows[ok]] = sign
-            nrm[rows[ok]] = lay.normal[ok]
-        # lumped weights: B's + and - columns along n (row sums), C's rows (column sums)
-        ai, aj, av = B.getValuesCSR()
-        rows = np.repeat(np.arange(m), np.diff(ai))
-        w = av * nrm[aj]
-        self.b_plus = np.bincount(rows, weights=w * (side[aj] > 0), minlength=m)
-        self.b_minus = np.bincount(rows, weights=w * (side[aj] < 0), minlength=m)
-        ci, cj, cv = C.getValuesCSR()
-        crow = np.repeat(np.arange(len(urows)), np.diff(ci))
-        wc = cv * nrm[crow]
-        self.c_plus = np.bincount(cj, weights=wc * (side[crow] > 0), minlength=m)
-        self.c_minus = np.bincount(cj, weights=wc * (side[crow] < 0), minlength=m)
-        scale = np.maximum(np.abs(self.b_plus - self.b_minus), 1e-300)
-        self.glued = np.abs(self.b_plus - self.b_minus) > 1e-8 * max(np.abs(D).max(initial=0.0), 1e-300) \
-            if m else np.zeros(0, dtype=bool)
-        self.glued |= np.abs(D) <= 1e-12 * scale
-        self.diag = np.where(D != 0.0, D, 1.0)
-        self.Z = self._basis(len(urows))
+        _, K = pc.getOperators()
+        context, rows, maps = served_rows(pc)
+        self._release()
+        if maps is None and not _has_lam(context, rows, K.getComm()):
+            self.A = K                                           # u alone: its elasticity
+            K.incRef()
+            K.setNearNullSpace(restricted_modes(context, rows))
+            self._set_inner(pc, K)
+            return
+        self._own_maps = maps is None
+        self.maps = glue_maps(K, context.contact(), rows) if maps is None else maps
+        self.A = K.createSubMatrix(self.maps.iu, self.maps.iu)
+        self.Z = glued_basis(self.maps, self.A)
         AZ = compat.ptap(self.A, self.Z)
-        AZ.setNearNullSpace(self._rigid_modes(lay, urows))
+        AZ.setNearNullSpace(self._rigid_modes(context))
         self._set_inner(pc, AZ)
-        self.r_u = self.A.createVecLeft()
-        self.work = self.A.createVecLeft()
-        self.v = self.Z.createVecRight()
-        self.zr = self.Z.createVecRight()
+        AZ.destroy()
+        self._work = {"up": self.A.createVecLeft(), "t": self.A.createVecLeft(), "u": self.A.createVecLeft(),
+                      "zr": self.Z.createVecRight(), "v": self.Z.createVecRight(),
+                      "s": self.maps.b.duplicate(), "lam": self.maps.b.duplicate()}
 
-    def _basis(self, nu: int) -> PETSc.Mat:
-        """Z: the glued displacements (orthonormal columns), (nu, nv).  A
-        glued pair with all 2d components free gets the tangential
-        components of each copy and one shared normal component; a pair
-        with fixed components (a symmetry plane) the null space of its
-        constraint n . (u+ - u-) over its free components."""
-        d = self.normal.shape[1] if len(self.normal) else 0
-        g = np.flatnonzero(self.glued)
-        plus, minus, n = self.plus[g], self.minus[g], self.normal[g]
-        special = np.zeros(nu, dtype=bool)
-        for side in (plus, minus):
-            special[side[side >= 0]] = True
-        free = np.flatnonzero(~special)
-        rows, cols, vals = [free], [np.arange(len(free))], [np.ones(len(free))]
-        col = len(free)
-        whole = np.all(plus >= 0, axis=1) & np.all(minus >= 0, axis=1)
-        if whole.any():
-            p, m, nw = plus[whole], minus[whole], n[whole]
-            t = _tangents(nw)                                          # (k, d-1, d)
-            for side in (p, m):                                        # tangential components of each copy
-                for k in range(d - 1):
-                    c = col + np.arange(len(nw))
-                    col += len(nw)
-                    rows.append(side.ravel())
-                    cols.append(np.repeat(c, d))
-                    vals.append(t[:, k, :].ravel())
-            c = col + np.arange(len(nw))                               # the shared normal component
-            col += len(nw)
-            for side in (p, m):
-                rows.append(side.ravel())
-                cols.append(np.repeat(c, d))
-                vals.append(nw.ravel() / np.sqrt(2.0))
-        for k in np.flatnonzero(~whole):                               # few: fixed components
-            dofs = np.concatenate([plus[k], minus[k]])
-            cvec = np.concatenate([n[k], -n[k]])[dofs >= 0]
-            dofs = dofs[dofs >= 0]
-            basis = np.linalg.svd(cvec[None, :])[2][1:] if np.linalg.norm(cvec) > 1e-12 else np.eye(len(dofs))
-            for vec in basis:
-                rows.append(dofs)
-                cols.append(np.full(len(dofs), col))
-                vals.append(vec)
-                col += 1
-        r, c, v = (np.concatenate(a) for a in (rows, cols, vals))
-        keep = np.abs(v) > 0.0
-        r, c, v = r[keep], c[keep], v[keep]
-        order = np.lexsort((c, r))
-        r, c, v = r[order], c[order], v[order]
-        ai = np.concatenate([[0], np.cumsum(np.bincount(r, minlength=nu))]).astype(compat.INT)
-        Z = PETSc.Mat().createAIJ([nu, col], csr=(ai, c.astype(compat.INT), v), comm=PETSc.COMM_SELF)
-        Z.assemble()
-        return Z
-
-    def _rigid_modes(self, lay: ContactLayout, urows: np.ndarray) -> PETSc.NullSpace:
+    def _rigid_modes(self, context) -> PETSc.NullSpace:
         """The rigid-body modes of the glued body: Z^T r for the translations
         and rotations r of the u rows (they are glued displacements)."""
-        pos = np.searchsorted(lay.u, urows)
-        x = lay.u_coords[pos] - lay.u_coords.mean(axis=0)
-        comp = lay.u_comp[pos]
-        r, vecs = self.Z.createVecLeft(), []
-        for m in rigid_modes(comp, x):
-            r.getArray()[:] = m
+        iset = _index_set(self.maps.u_full, self.A.getComm())
+        vecs = []
+        for mode in context.rigid_modes():
+            r = mode.getSubVector(iset)
             v = self.Z.createVecRight()
             self.Z.multTranspose(r, v)
+            mode.restoreSubVector(iset, r)
             vecs.append(v)
-        return orthonormal_nullspace(vecs, PETSc.COMM_SELF)
+        iset.destroy()
+        return orthonormal_nullspace(vecs, self.A.getComm())
 
     def _set_inner(self, pc, AZ):
         if self.ksp is None:
-            self.ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+            self.ksp = PETSc.KSP().create(comm=AZ.getComm())
             self.ksp.setOptionsPrefix((pc.getOptionsPrefix() or "") + "contact_")
             self.ksp.setType("preonly")
             self.ksp.getPC().setType("gamg")
@@ -264,36 +395,59 @@ class ContactNullspacePC:
         self.ksp.setFromOptions()
         self.ksp.setUp()
 
-    def _normal_part(self, f: np.ndarray, side: np.ndarray) -> np.ndarray:
-        """sum over the free components of f[side] . n (fixed components: 0)."""
-        vals = np.where(side >= 0, f[np.maximum(side, 0)], 0.0)
-        return np.einsum("md,md->m", vals, self.normal)
-
     def apply(self, pc, x, y):
-        xa = x.getArray(readonly=True)
-        r_u, r_lam = xa[self.urows], xa[self.lamrows]
-        g = self.glued
-        u = np.zeros(len(self.urows))
-        jump = np.where(g, r_lam / np.where(g, self.b_plus - self.b_minus, 1.0), 0.0)
-        for side, sign in ((self.plus, 1.0), (self.minus, -1.0)):
-            ok = side >= 0
-            u[side[ok]] += (sign * jump[:, None] * self.normal)[ok]
-        self.work.getArray()[:] = u
-        self.A.mult(self.work, self.r_u)                              # A u_p
-        self.r_u.getArray()[:] = r_u - self.r_u.getArray(readonly=True)
-        self.Z.multTranspose(self.r_u, self.zr)
-        self.ksp.solve(self.zr, self.v)
-        self.Z.mult(self.v, self.work)
-        u = u + self.work.getArray(readonly=True)
-        self.work.getArray()[:] = u
-        self.A.mult(self.work, self.r_u)
-        f = r_u - self.r_u.getArray(readonly=True)                    # the force the glue carries
-        fn = np.zeros(len(self.lamrows))
-        if len(fn):
-            den = self.c_plus - self.c_minus
-            glue = (self._normal_part(f, self.plus) - self._normal_part(f, self.minus)) / \
-                np.where(g & (den != 0), den, 1.0)
-            fn = np.where(g, glue, r_lam / self.diag)
-        ya = y.getArray()
-        ya[self.urows] = u
-        ya[self.lamrows] = fn
+        if self.maps is None:
+            self.ksp.solve(x, y)
+            return
+        m, w = self.maps, self._work
+        xu, xl = x.getSubVector(m.iu), x.getSubVector(m.ilam)
+        g = m.glued.getArray(readonly=True)
+        r_lam = xl.getArray(readonly=True)
+        w["s"].getArray()[:] = g * r_lam / _safe(m.b.getArray(readonly=True))
+        m.pt.multTranspose(w["s"], w["up"])                      # 1. u_p = P (r_lam / b)
+        self.A.mult(w["up"], w["t"])
+        w["t"].aypx(-1.0, xu)                                    # 2. r_u - A u_p
+        self.Z.multTranspose(w["t"], w["zr"])
+        self.ksp.solve(w["zr"], w["v"])
+        self.Z.mult(w["v"], w["u"])
+        w["u"].axpy(1.0, w["up"])                                #    u = Z v + u_p
+        self.A.mult(w["u"], w["t"])
+        w["t"].aypx(-1.0, xu)                                    # 3. the force the glue carries
+        m.pt.mult(w["t"], w["lam"])
+        lam = w["lam"].getArray()
+        lam[:] = g * lam / _safe(m.c.getArray(readonly=True)) + \
+            (1.0 - g) * r_lam / _safe(m.diag.getArray(readonly=True))
+        x.restoreSubVector(m.iu, xu)
+        x.restoreSubVector(m.ilam, xl)
+        for iset, v in ((m.iu, w["u"]), (m.ilam, w["lam"])):
+            sub = y.getSubVector(iset)
+            v.copy(sub)
+            y.restoreSubVector(iset, sub)
+
+    def _release(self):
+        for v in self._work.values():
+            v.destroy()
+        self._work = {}
+        for obj in (self.A, self.Z):
+            if obj is not None:
+                obj.destroy()
+        if self.maps is not None and self._own_maps:
+            self.maps.destroy()
+        self.maps = self.A = self.Z = None
+
+    def reset(self, pc):
+        self._release()
+        if self.ksp is not None:
+            self.ksp.destroy()
+            self.ksp = None
+
+
+def _has_lam(context, rows: np.ndarray, comm) -> bool:
+    """Whether any rank's rows hold contact tractions."""
+    n = int(np.isin(context.fields["lam"], rows).sum()) if "lam" in context.fields else 0
+    return comm.tompi4py().allreduce(n) > 0
+
+
+def _safe(a: np.ndarray) -> np.ndarray:
+    """A divisor with its zeros replaced by ones."""
+    return np.where(a != 0.0, a, 1.0)

@@ -1,6 +1,12 @@
-"""Field splits of a problem's unknowns for PCFIELDSPLIT, and the Python PC
-that rebuilds them on the reduced systems of the VI Newton methods.
+"""Field splits of a problem's unknowns for PCFIELDSPLIT, the context that
+petthm's Python preconditioners get from the run they serve, and the Python
+PC that rebuilds the splits on the reduced systems of the VI Newton methods.
 
+* ``SolverContext``: the problem, the SNES (its VI inactive set), and what
+  is computed once per run in the problem's global numbering: the field
+  index sets, the rigid-body modes, the contact pairs.  ``serve`` hands it to
+  a PC; ``served_rows`` tells a PC which unknowns of the full system its
+  operator's rows are.
 * ``field_splits``: one index set per field, named by the field (the
   fieldsplit prefix ``-fieldsplit_u_...``), with the rigid-body modes of
   ``u`` composed as "nearnullspace" for GAMG (petsc-notes "Field split").
@@ -13,6 +19,7 @@ that rebuilds them on the reduced systems of the VI Newton methods.
 from __future__ import annotations
 
 import weakref
+from dataclasses import dataclass
 
 import numpy as np
 from petsc4py import PETSc
@@ -20,39 +27,128 @@ from petsc4py import PETSc
 from . import compat
 from .errors import InputError
 
-#: the attribute of the PC through which ``solver.TimeStepper`` gives
-#: ``VIFieldSplit`` the (problem, SNES) it serves
-SERVES = "petthm_vi_fieldsplit"
+#: the attribute of a PC through which ``solver.TimeStepper`` gives a Python
+#: PC the ``SolverContext`` it serves (a weak reference)
+SERVES = "petthm_context"
+#: the attribute of a split's PC through which ``VIFieldSplit`` tells it
+#: which unknowns of the full system its rows are: (context ref, rows, maps)
+SPLIT = "petthm_split"
 
 
-def field_splits(problem, space: np.ndarray | None = None) -> list[tuple[str, PETSc.IS]]:
-    """(field name, sorted global indices) of every field, the rigid-body
-    modes of ``u`` composed on its index set as "nearnullspace".
-    ``space``: this rank's part of the sorted global unknowns of a reduced
-    system (the inactive set of a VI solve); the index sets are then
-    restricted to it and numbered in the reduced system."""
-    dm = problem.dm
-    names, isets, _ = dm.createFieldDecomposition()
-    offset = 0 if space is None else _space_offset(dm, space)
+class SolverContext:
+    """What petthm's Python preconditioners need from the run they serve:
+    the problem, its SNES (the VI inactive set), and structures computed once
+    per run in the problem's global numbering."""
+
+    def __init__(self, problem, snes: PETSc.SNES | None = None):
+        self.problem = problem
+        self._snes = weakref.ref(snes) if snes is not None else None
+        names, isets, _ = problem.dm.createFieldDecomposition()
+        self.fields = {name: iset.getIndices().copy() for name, iset in zip(names, isets)}
+        self._contact = None
+        self._rigid = None
+
+    def rows(self, P: PETSc.Mat) -> np.ndarray:
+        """The full-system unknowns of the operator's rows on this rank: the
+        VI inactive set of ``vinewtonrsls`` when the operator is that reduced
+        system, else all of them."""
+        snes = self._snes() if self._snes is not None else None
+        if snes is not None and snes.getType() == "vinewtonrsls" and \
+                P.getSize()[0] != self.problem.X.getSize():
+            return np.asarray(snes.getVIInactiveSet().getIndices(), dtype=compat.INT)
+        r0, r1 = P.getOwnershipRange()
+        return np.arange(r0, r1, dtype=compat.INT)
+
+    def contact(self):
+        """The contact pairs (``contactpc.ContactStructure``), made once."""
+        if self._contact is None:
+            from .contactpc import contact_structure
+            self._contact = contact_structure(self.problem)
+        return self._contact
+
+    def rigid_modes(self) -> list[PETSc.Vec]:
+        """Translations and rotations of the u unknowns as full-system vectors
+        (zero on the other fields; components fixed by rollers are not
+        unknowns and are absent), made once."""
+        if self._rigid is None:
+            self._rigid = _rigid_mode_vectors(self.problem)
+        return self._rigid
+
+    def destroy(self) -> None:
+        if self._contact is not None:
+            self._contact.destroy()
+        for v in self._rigid or ():
+            v.destroy()
+        self._contact = self._rigid = None
+
+
+def serve(pc: PETSc.PC, context: SolverContext) -> None:
+    """Tell a Python PC which run it serves (kept on the PC: PETSc replaces
+    the Python context whenever it reads the options; a weak reference, so
+    that the PC does not keep its own SNES alive past PETSc's finalisation)."""
+    pc.setAttr(SERVES, weakref.ref(context))
+
+
+def served_rows(pc: PETSc.PC):
+    """(context, rows, maps) of a Python PC: the run it serves, the
+    full-system unknowns of its operator's rows on this rank, and the contact
+    maps of that operator when the PC that made the split computed them
+    (else None)."""
+    split = pc.getAttr(SPLIT)
+    if split is not None:
+        ref, rows, maps = split
+        context = ref()
+    else:
+        ref = pc.getAttr(SERVES)
+        context = ref() if ref is not None else None
+        rows = maps = None
+    if context is None:
+        raise RuntimeError("this preconditioner is set up by petthm's TimeStepper only")
+    return context, rows if rows is not None else context.rows(pc.getOperators()[1]), maps
+
+
+@dataclass
+class Split:
+    """One split of an operator: its name, its rows in the operator's
+    numbering (``iset``) and the full-system unknowns they are (``rows``)."""
+    name: str
+    iset: PETSc.IS
+    rows: np.ndarray
+
+
+def field_splits(context: SolverContext, rows: np.ndarray | None = None, r0: int = 0) -> list[Split]:
+    """One split per field of an operator whose rows on this rank are the
+    full-system unknowns ``rows`` (sorted; default: all) and begin at row
+    ``r0``; the rigid-body modes of ``u`` composed on its index set as
+    "nearnullspace".  Fields without rows anywhere are left out."""
+    comm = context.problem.dm.comm
     out = []
-    for name, iset in zip(names, isets):
-        if space is not None:
-            idx = iset.getIndices()
-            pos = np.searchsorted(space, idx[np.isin(idx, space)]) + offset
-            iset = PETSc.IS().createGeneral(pos.astype(compat.INT), comm=dm.comm)
+    for name, idx in context.fields.items():
+        inside = idx if rows is None else idx[np.isin(idx, rows)]
+        pos = inside if rows is None else np.searchsorted(rows, inside) + r0
+        iset = PETSc.IS().createGeneral(pos.astype(compat.INT), comm=comm)
+        if iset.getSize() == 0:
+            continue
         if name == "u":
-            iset.compose("nearnullspace", rigid_body_modes(problem, iset, space, offset))
-        out.append((name, iset))
+            iset.compose("nearnullspace", restricted_modes(context, inside))
+        out.append(Split(name, iset, inside))
     return out
 
 
-def rigid_body_modes(problem, iset: PETSc.IS, space: np.ndarray | None = None,
-                     offset: int = 0) -> PETSc.NullSpace:
-    """Translations and rotations of the u unknowns in ``iset`` (owned,
-    sorted indices; components fixed by rollers are absent, so the vectors
-    are built per unknown, not with a block size), orthonormalised.
-    ``space``, ``offset``: the reduced system ``iset`` numbers (see
-    ``field_splits``); default: all unknowns."""
+def restricted_modes(context: SolverContext, rows: np.ndarray) -> PETSc.NullSpace:
+    """The rigid-body modes on the full-system unknowns ``rows`` (this
+    rank's, u only), orthonormalised."""
+    iset = PETSc.IS().createGeneral(np.asarray(rows, dtype=compat.INT), comm=context.problem.dm.comm)
+    vecs = []
+    for mode in context.rigid_modes():
+        sub = mode.getSubVector(iset)
+        vecs.append(sub.copy())
+        mode.restoreSubVector(iset, sub)
+    iset.destroy()
+    return orthonormal_nullspace(vecs, context.problem.dm.comm)
+
+
+def _rigid_mode_vectors(problem) -> list[PETSc.Vec]:
     disc = problem.disc
     d = disc.mesh.dim
     dofs = disc.field_local_dofs("u")                            # (n, d) local
@@ -60,20 +156,16 @@ def rigid_body_modes(problem, iset: PETSc.IS, space: np.ndarray | None = None,
     x = x - x.mean(axis=0) if len(x) else x
     gidx = disc.global_index[dofs]
     own = disc._owned(gidx) & ~np.isin(dofs, problem.constraints.constrained_local())
-    if space is not None:
-        own &= np.isin(gidx, space)
-    target = gidx[own] if space is None else np.searchsorted(space, gidx[own]) + offset
-    rows = np.searchsorted(iset.getIndices(), target)
+    r0 = problem.X.getOwnershipRange()[0]
     comp = np.broadcast_to(np.arange(d), dofs.shape)[own]
     xs = np.broadcast_to(x[:, None, :], dofs.shape + (d,))[own]
-    n = iset.getLocalSize()
-    comm = problem.dm.comm
-    vecs = []
+    out = []
     for m in rigid_modes(comp, xs):
-        v = PETSc.Vec().createMPI((n, PETSc.DECIDE), comm=comm)
-        v.getArray()[rows] = m
-        vecs.append(v)
-    return orthonormal_nullspace(vecs, comm)
+        v = problem.X.duplicate()
+        v.set(0.0)
+        v.getArray()[gidx[own] - r0] = m
+        out.append(v)
+    return out
 
 
 def rigid_modes(comp: np.ndarray, x: np.ndarray) -> list[np.ndarray]:
@@ -100,21 +192,9 @@ def orthonormal_nullspace(vecs: list, comm) -> PETSc.NullSpace:
     return PETSc.NullSpace().create(vectors=out, comm=comm)
 
 
-def _space_offset(dm, space: np.ndarray) -> int:
-    """First row of this rank in a reduced system of which it holds ``space``."""
-    return dm.comm.tompi4py().exscan(len(space)) or 0
-
-
-def serve(pc: PETSc.PC, problem, snes: PETSc.SNES) -> None:
-    """Tell the PC's ``VIFieldSplit`` which problem and SNES it serves (kept
-    on the PC: PETSc replaces the Python context whenever it reads the
-    options; weak references, so that the PC does not keep its own SNES
-    alive past PETSc's finalisation)."""
-    pc.setAttr(SERVES, (weakref.ref(problem), weakref.ref(snes)))
-
-
 class VIFieldSplit:
-    """Field split for the reduced systems of PETSc's VI Newton methods.
+    """Field split for the reduced systems of PETSc's VI Newton methods (and
+    for any system: without bounds it splits the whole one).
 
     At every set-up an inner PCFIELDSPLIT is rebuilt: one split per field
     restricted to ``SNES.getVIInactiveSet()`` (all unknowns for
@@ -124,40 +204,74 @@ class VIFieldSplit:
 
     ``-vi_groups NAME=F1+F2,NAME2=...`` merges fields into named splits
     (fields the scene does not have are skipped, empty groups dropped), so
-    that one two-split Schur recipe serves u with lam alone and u with
-    {lam, pf, Tf, Tm}: ``-vi_groups u=u,rest=lam+pm+pf+Tm+Tf``."""
+    that one recipe serves u with lam alone and u with {lam, pf, Tf, Tm}:
+    ``-vi_groups mech=u+lam,rest=pm+pf+Tm+Tf``.  Every split's PC learns
+    which unknowns it holds (``served_rows``), so a split can be given
+    ``contactpc.ContactNullspacePC``.
+
+    When the first split holds u and lam, every other split s is
+    preconditioned by S_s = A_ss - A_s,lam G A_u,s (``contact_schur``, the
+    "pmat" of its index set: the block of a multiplicative split, the
+    preconditioner of the Schur complement with ``-vi_pc_fieldsplit_type
+    schur -vi_pc_fieldsplit_schur_precondition user``): what its fields see
+    of the contact when the glue carries their face loads.
+    ``-vi_contact_schur 0`` leaves the blocks as they are."""
 
     def __init__(self):
         self.inner = None
+        self._owned: list = []
 
     def setUp(self, pc):
         A, P = pc.getOperators()
-        served = pc.getAttr(SERVES)
-        problem, snes = (served[0](), served[1]()) if served is not None else (None, None)
-        if problem is None or snes is None:
+        ref = pc.getAttr(SERVES)
+        context = ref() if ref is not None else None
+        if context is None:
             raise RuntimeError("VIFieldSplit is set up by petthm's TimeStepper only")
-        space = None
-        if snes.getType() == "vinewtonrsls" and P.getSize()[0] != problem.X.getSize():
-            space = np.asarray(snes.getVIInactiveSet().getIndices(), dtype=compat.INT)
-        splits = field_splits(problem, space)
-        splits = self._grouped([(n, s) for n, s in splits if s.getSize() > 0], pc)
-        if self.inner is not None:
-            self.inner.destroy()
+        rows = context.rows(P)
+        r0 = P.getOwnershipRange()[0]
+        splits = self._grouped(field_splits(context, rows, r0), pc)
+        self.reset(pc)
         self.inner = PETSc.PC().create(comm=pc.getComm())
         self.inner.setOptionsPrefix((pc.getOptionsPrefix() or "") + "vi_")
         self.inner.setOperators(A, P)
         self.inner.setType("fieldsplit")
-        self.inner.setFieldSplitIS(*splits)
+        self.inner.setFieldSplitIS(*[(s.name, s.iset) for s in splits])
+        maps = self._contact_maps(context, P, splits)
+        # the splits' KSPs exist once their index sets are given (the Schur
+        # type reports them only after its set-up: ask before the options make it one)
+        for split, ksp in zip(splits, self.inner.getFieldSplitSubKSP()):
+            own_maps = maps if split is splits[0] else None
+            ksp.getPC().setAttr(SPLIT, (weakref.ref(context), split.rows, own_maps))
+        if maps is not None and PETSc.Options(self.inner.getOptionsPrefix()).getBool("contact_schur", True):
+            for split in splits[1:]:                            # their preconditioning blocks
+                Sp = contact_schur(P, split, maps, rows, context)
+                split.iset.compose("pmat", Sp)
+                self._owned.append(Sp)
         self.inner.setFromOptions()
         self.inner.setUp()
 
+    def _contact_maps(self, context, P, splits):
+        """The contact maps of the first split when it holds u and lam."""
+        if not splits or not {"u", "lam"} <= set(context.fields):
+            return None
+        first = splits[0].rows
+        held = [int(np.isin(context.fields[f], first).sum()) for f in ("u", "lam")]
+        if min(P.getComm().tompi4py().allreduce(n) for n in held) == 0:
+            return None
+        from .contactpc import glue_maps
+        K = P.createSubMatrix(splits[0].iset, splits[0].iset)
+        maps = glue_maps(K, context.contact(), first)
+        K.destroy()
+        self._owned.append(maps)
+        return maps
+
     @staticmethod
-    def _grouped(splits: list, pc) -> list:
+    def _grouped(splits: list[Split], pc) -> list[Split]:
         """The splits merged by ``-vi_groups`` (see the class docstring)."""
         text = PETSc.Options((pc.getOptionsPrefix() or "") + "vi_").getString("groups", "")
         if not text:
             return splits
-        by_name = dict(splits)
+        by_name = {s.name: s for s in splits}
         grouped = {f for item in text.split(",") for f in item.partition("=")[2].split("+")}
         missing = [n for n in by_name if n not in grouped]
         if missing:
@@ -165,20 +279,52 @@ class VIFieldSplit:
         out = []
         for item in text.split(","):
             name, _, members = item.partition("=")
-            parts = [by_name[f] for f in members.split("+") if f in by_name]
             if not name or not members:
                 raise InputError(f"option -vi_groups: '{item}' is not NAME=FIELD+FIELD...")
+            parts = [by_name[f] for f in members.split("+") if f in by_name]
             if len(parts) == 1:
-                out.append((name, parts[0]))
+                out.append(Split(name, parts[0].iset, parts[0].rows))
             elif parts:
-                idx = np.unique(np.concatenate([p.getIndices() for p in parts])).astype(compat.INT)
-                out.append((name, PETSc.IS().createGeneral(idx, comm=pc.getComm())))
+                idx = np.unique(np.concatenate([p.iset.getIndices() for p in parts])).astype(compat.INT)
+                rows = np.unique(np.concatenate([p.rows for p in parts]))
+                out.append(Split(name, PETSc.IS().createGeneral(idx, comm=pc.getComm()), rows))
         return out
 
     def reset(self, pc):
         if self.inner is not None:
             self.inner.destroy()
             self.inner = None
+        for obj in self._owned:
+            obj.destroy()
+        self._owned = []
 
     def apply(self, pc, x, y):
         self.inner.apply(x, y)
+
+
+def contact_schur(P: PETSc.Mat, split: Split, maps, rows: np.ndarray, context) -> PETSc.Mat:
+    """S = A_ss - A_s,lam G A_u,s: the block of the fields of ``split`` when
+    the {u, lam} split answers a load on the fracture faces with the contact
+    traction alone (the glue of ``contactpc``; G its lam-recovery map, the
+    lumped contact of the closed nodes).  For a fluid pressure on a closed
+    fracture this is the Schur complement, exact with lumped weights: lam
+    changes by -p and u does not move, so the fracture storage gains the
+    joint compliance d(ac)/d(lam) that the pressure rows see through lam
+    (the fracture analogue of the fixed-stress term of Biot)."""
+    comm = P.getComm()
+    r0 = P.getOwnershipRange()[0]
+
+    def positions(field):
+        return PETSc.IS().createGeneral(
+            (np.flatnonzero(np.isin(rows, context.fields[field])) + r0).astype(compat.INT), comm=comm)
+    iu, ilam = positions("u"), positions("lam")
+    Ass = P.createSubMatrix(split.iset, split.iset)
+    Asl = P.createSubMatrix(split.iset, ilam)
+    Aus = P.createSubMatrix(iu, split.iset)
+    G = maps.recovery()
+    GA = G.matMult(Aus)
+    corr = Asl.matMult(GA)
+    Ass.axpy(-1.0, corr, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    for obj in (iu, ilam, Asl, Aus, G, GA, corr):
+        obj.destroy()
+    return Ass

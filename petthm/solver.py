@@ -118,6 +118,7 @@ class TimeStepper:
         if problem.model.bounds:
             self._set_bounds(ts.getSNES())
         pc = ts.getSNES().getKSP().getPC()
+        self.context = fieldsplit.SolverContext(problem, self.snes)
         self._set_field_splits(pc)
         # a reused factorisation is an inexact solve: a Krylov method must correct it
         krylov = ts.getSNES().getKSP().getType() != "preonly"
@@ -137,14 +138,14 @@ class TimeStepper:
         """A field-split preconditioner gets one split per field, named by the
         field (-fieldsplit_u_..., -fieldsplit_pm_...), with the rigid-body
         modes on u, unless the options group fields themselves
-        (-pc_fieldsplit_0_fields ...).  The Python PC ``VIFieldSplit`` is
-        given the problem and the SNES (it splits the VI's reduced system)."""
+        (-pc_fieldsplit_0_fields ...).  A Python PC (``VIFieldSplit``,
+        ``ContactNullspacePC``) is given the run's ``SolverContext``."""
         if pc.getType() == "python":
-            fieldsplit.serve(pc, self.problem, self.snes)
+            fieldsplit.serve(pc, self.context)
             return
         if pc.getType() != "fieldsplit" or PETSc.Options().hasName("pc_fieldsplit_0_fields"):
             return
-        pc.setFieldSplitIS(*fieldsplit.field_splits(self.problem))
+        pc.setFieldSplitIS(*[(s.name, s.iset) for s in fieldsplit.field_splits(self.context)])
 
     def _set_bounds(self, snes):
         """Variable bounds (contact) need one of SNES's VI Newton methods."""
@@ -209,6 +210,7 @@ class TimeStepper:
         comm = self.ts.comm
         self.ts.destroy()
         self.snes = None
+        self.context.destroy()
         gc.collect()
         PETSc.garbage_cleanup(comm)
 
