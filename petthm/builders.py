@@ -199,5 +199,8 @@ class ModelBuilder:
             porous = m.has("pm")
             phi_beta = self.p.rock_porosity * self.p.fluid_thermal_expansion if porous else 0.0
             m.add(pe.heating_terms(self.elastic, "Tm", "pm" if porous else None, phi_beta))
+        # what a block preconditioner adds to the pressure block (not the Jacobian)
+        if self.elastic is not None and self.elastic.p is not None and m.has(self.elastic.p):
+            m.preconditioner += pe.fixed_stress_terms(self.elastic, self.elastic.p)
         m.fields.sort(key=lambda f: FIELD_ORDER.index(f.name))
         return m

@@ -209,13 +209,16 @@ class VIFieldSplit:
     which unknowns it holds (``served_rows``), so a split can be given
     ``contactpc.ContactNullspacePC``.
 
-    When the first split holds u and lam, every other split s is
-    preconditioned by S_s = A_ss - A_s,lam G A_u,s (``contact_schur``, the
-    "pmat" of its index set: the block of a multiplicative split, the
-    preconditioner of the Schur complement with ``-vi_pc_fieldsplit_type
-    schur -vi_pc_fieldsplit_schur_precondition user``): what its fields see
-    of the contact when the glue carries their face loads.
-    ``-vi_contact_schur 0`` leaves the blocks as they are."""
+    Every split s after the first is preconditioned by an approximation of
+    its Schur complement with respect to the mechanics of the first split
+    (``split_block``; the "pmat" of its index set: the block of a
+    multiplicative split, the preconditioner of the Schur complement with
+    ``-vi_pc_fieldsplit_type schur -vi_pc_fieldsplit_schur_precondition
+    user``): S_s = A_ss - A_s,lam G A_u,s when the first split holds u and
+    lam (what its fields see of the contact when the glue carries their
+    face loads; ``-vi_contact_schur 0`` leaves it out), plus the model's
+    preconditioner blocks (the fixed-stress term of Biot;
+    ``-vi_fixed_stress 0`` leaves it out)."""
 
     def __init__(self):
         self.inner = None
@@ -242,9 +245,12 @@ class VIFieldSplit:
         for split, ksp in zip(splits, self.inner.getFieldSplitSubKSP()):
             own_maps = maps if split is splits[0] else None
             ksp.getPC().setAttr(SPLIT, (weakref.ref(context), split.rows, own_maps))
-        if maps is not None and PETSc.Options(self.inner.getOptionsPrefix()).getBool("contact_schur", True):
-            for split in splits[1:]:                            # their preconditioning blocks
-                Sp = contact_schur(P, split, maps, rows, context)
+        opts = PETSc.Options(self.inner.getOptionsPrefix())
+        extra = context.problem.preconditioner_blocks() if opts.getBool("fixed_stress", True) else None
+        glue = maps if opts.getBool("contact_schur", True) else None
+        for split in splits[1:]:                                # their preconditioning blocks
+            Sp = split_block(P, split, rows, context, glue, extra)
+            if Sp is not None:
                 split.iset.compose("pmat", Sp)
                 self._owned.append(Sp)
         self.inner.setFromOptions()
@@ -302,29 +308,60 @@ class VIFieldSplit:
         self.inner.apply(x, y)
 
 
-def contact_schur(P: PETSc.Mat, split: Split, maps, rows: np.ndarray, context) -> PETSc.Mat:
-    """S = A_ss - A_s,lam G A_u,s: the block of the fields of ``split`` when
-    the {u, lam} split answers a load on the fracture faces with the contact
-    traction alone (the glue of ``contactpc``; G its lam-recovery map, the
-    lumped contact of the closed nodes).  For a fluid pressure on a closed
-    fracture this is the Schur complement, exact with lumped weights: lam
-    changes by -p and u does not move, so the fracture storage gains the
-    joint compliance d(ac)/d(lam) that the pressure rows see through lam
-    (the fracture analogue of the fixed-stress term of Biot)."""
+def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None,
+                extra: PETSc.Mat | None = None) -> PETSc.Mat | None:
+    """The preconditioning block of ``split`` (see ``VIFieldSplit``):
+
+        S = A_ss - A_s,lam G A_u,s + E_ss
+
+    * A_s,lam G A_u,s (with the contact ``maps`` of the {u, lam} split, G
+      their lam-recovery map): the {u, lam} split answers a load on the
+      fracture faces with the contact traction alone (the glue of
+      ``contactpc``, the lumped contact of the closed nodes).  For a fluid
+      pressure on a closed fracture this is the Schur complement, exact with
+      lumped weights: lam changes by -p and u does not move, so the
+      fracture storage gains the joint compliance d(ac)/d(lam) that the
+      pressure rows see through lam (the fracture analogue of fixed stress);
+    * E (``extra``, full-system numbering): the model's preconditioner
+      blocks (``Problem.preconditioner_blocks``: the fixed-stress term).
+
+    None when neither applies (the block stays A_ss)."""
     comm = P.getComm()
     r0 = P.getOwnershipRange()[0]
+    has_extra = extra is not None and comm.tompi4py().allreduce(
+        int(np.isin(split.rows, _rows_of(extra)).any()), op=_mpi_max())
+    if maps is None and not has_extra:
+        return None
 
     def positions(field):
         return PETSc.IS().createGeneral(
             (np.flatnonzero(np.isin(rows, context.fields[field])) + r0).astype(compat.INT), comm=comm)
-    iu, ilam = positions("u"), positions("lam")
-    Ass = P.createSubMatrix(split.iset, split.iset)
-    Asl = P.createSubMatrix(split.iset, ilam)
-    Aus = P.createSubMatrix(iu, split.iset)
-    G = maps.recovery()
-    GA = G.matMult(Aus)
-    corr = Asl.matMult(GA)
-    Ass.axpy(-1.0, corr, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-    for obj in (iu, ilam, Asl, Aus, G, GA, corr):
-        obj.destroy()
-    return Ass
+    S = P.createSubMatrix(split.iset, split.iset)
+    if maps is not None:
+        iu, ilam = positions("u"), positions("lam")
+        Asl = P.createSubMatrix(split.iset, ilam)
+        Aus = P.createSubMatrix(iu, split.iset)
+        G = maps.recovery()
+        GA = G.matMult(Aus)
+        corr = Asl.matMult(GA)
+        S.axpy(-1.0, corr, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        for obj in (iu, ilam, Asl, Aus, G, GA, corr):
+            obj.destroy()
+    if has_extra:
+        full = PETSc.IS().createGeneral(split.rows.astype(compat.INT), comm=comm)
+        E = extra.createSubMatrix(full, full)
+        S.axpy(1.0, E, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        E.destroy()
+        full.destroy()
+    return S
+
+
+def _rows_of(M: PETSc.Mat) -> np.ndarray:
+    """The owned rows of M that hold an entry."""
+    ai = M.getValuesCSR()[0]
+    return np.flatnonzero(np.diff(ai)) + M.getOwnershipRange()[0]
+
+
+def _mpi_max():
+    from mpi4py import MPI
+    return MPI.MAX

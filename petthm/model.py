@@ -108,6 +108,7 @@ class Model:
     points: list[PointTerm] = field(default_factory=list)
     ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
     bounds: dict = field(default_factory=dict)    # {field: (lower, upper)} SI, None: unbounded
+    preconditioner: list[CellJacobian] = field(default_factory=list)
 
     def regions(self) -> list[Region]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

@@ -55,6 +55,9 @@ class Problem:
         # puts one, e.g. the contact rows), as MatDiagonalSet in SNES VI needs
         self._diagonal = np.arange(lo, hi, dtype=compat.INT)
         self.J: PETSc.Mat | None = None
+        self._pc_blocks: PETSc.Mat | None = None
+        self._pc_assemblers: list[Assembler] = []
+        self._jacobian_point = None               # (xl, xdl, t, shift) of the last Jacobian
         self._ev_res = PETSc.Log.Event("thm.residual")
         self._ev_jac = PETSc.Log.Event("thm.jacobian")
 
@@ -166,6 +169,7 @@ class Problem:
         xl, xdl = self.local_arrays(X, t, Xdot)
         compat.coo_set_values(P, self.jacobian_values(xl, xdl, t, shift))
         P.assemble()
+        self._jacobian_point = (xl.copy(), xdl.copy(), t, shift)
         if J != P:
             J.assemble()
         self._ev_jac.end()
@@ -179,6 +183,26 @@ class Problem:
             self.J = self.dm.createMat()
             compat.coo_preallocate(self.J, np.concatenate(rows), np.concatenate(cols))
         return self.J
+
+    def preconditioner_blocks(self) -> PETSc.Mat | None:
+        """The model's ``preconditioner`` blocks (e.g. the fixed-stress term),
+        scaled like the Jacobian, at the state, time and shift of the last
+        Jacobian; None when the model has none."""
+        if not self.model.preconditioner or self._jacobian_point is None:
+            return None
+        if self._pc_blocks is None:
+            terms = Model(self.model.fields, [], self.model.preconditioner)
+            regions = sorted({j.region for j in self.model.preconditioner})
+            self._pc_assemblers = [Assembler(self.disc, terms, self.scales, region=r,
+                                             inv_rscale=self.inv_rscale) for r in regions]
+            self._pc_blocks = self.dm.createMat()
+            compat.coo_preallocate(self._pc_blocks, np.concatenate([a.coo_rows for a in self._pc_assemblers]),
+                                   np.concatenate([a.coo_cols for a in self._pc_assemblers]))
+        xl, xdl, t, shift = self._jacobian_point
+        compat.coo_set_values(self._pc_blocks, np.concatenate(
+            [a.jacobian_values(xl, xdl, t, shift) for a in self._pc_assemblers]))
+        self._pc_blocks.assemble()
+        return self._pc_blocks
 
     # -- residual scaling --------------------------------------------------------------------
     def auto_residual_scales(self, t: float, shift: float) -> dict[str, float]:

@@ -162,6 +162,24 @@ def traction(u: str, boundary: str, t_of_x) -> FacetTerm:
     return FacetTerm(u, boundary, f0, None)
 
 
+def fixed_stress_terms(el: Elastic, p: str) -> list[CellJacobian]:
+    """The fixed-stress approximation of the pressure Schur complement
+    (a preconditioner block, not part of the Jacobian):
+
+        S = A_pp - A_pu A_uu^-1 A_up  ~  A_pp + shift alpha^2 / K_dr M_p,
+
+    A_pu = shift alpha (q, div du) (section 5), A_up = -alpha (div w, dp)
+    (section 2), K_dr = lambda + 2 G / d the drained bulk modulus of the
+    d-dimensional body (Kim, Tchelepi & Juanes 2011; the fixed-stress
+    split's stabilisation with the physical choice of its constant)."""
+    K_dr = el.lame + 2.0 * el.shear / el.dim
+    beta = el.biot ** 2 / K_dr
+
+    def g0(ctx):
+        return np.full(ctx.shape, beta * ctx.shift)[..., None, None]
+    return [CellJacobian(p, p, g0=g0, region=el.region)]
+
+
 def pressure_stabilisation_terms(el: Elastic, p: str, factor: float = 1.0) -> tuple[list, list]:
     """Flow-equation perturbation tau int grad q . grad(dp/dt), tau = factor h^2 / (4 (lambda + 2G))
     (Aguilar, Gaspar, Lisbona & Rodrigo 2008): removes the non-physical pressure

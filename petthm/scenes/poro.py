@@ -68,6 +68,8 @@ class TerzaghiParams:
     """Terzaghi consolidation column (terzaghi)"""
     terzaghi_height: float = param(10.0, "m", "column height L", lo=0.0, lo_open=True)
     terzaghi_width: float = param(1.0, "m", "column width", lo=0.0, lo_open=True)
+    terzaghi_dim: int = param(2, "-", "space dimension (3: a square column, rollers on its four sides)",
+                              choices=(2, 3))
     terzaghi_load: float = param(1e6, "Pa", "compressive load sigma0 on the top", lo=0.0, lo_open=True)
     terzaghi_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2))
     biot_stabilization: float = param(0.0, "-", "factor of the pressure stabilisation h^2/(4(lambda+2G)) "
@@ -96,10 +98,11 @@ class _TerzaghiMonitor(Monitor):
         # pressure outside [0, p0] (the undrained pressure bounds the solution), relative to the load
         over = max(pmax - sc.p0(), -pmin, 0.0) / p.terzaghi_load if t > 0 else 0.0
         self.overshoot = max(self.overshoot, over)
-        settlement = -probes.point_value(problem, "u", (0.0, p.terzaghi_height), X, t, component=1)
+        top, base = sc.point(p.terzaghi_height), sc.point(0.0)
+        settlement = -probes.point_value(problem, "u", top, X, t, component=1)
         out = {"settlement": settlement, "settlement_exact": sc.exact_settlement(t), "p_overshoot": over,
-               "p_base": probes.point_value(problem, "pm", (0.0, 0.0), X, t),
-               "p_base_exact": float(sc.exact_p(np.array([[0.0, 0.0]]), t)[0]) if t > 0 else sc.p0()}
+               "p_base": probes.point_value(problem, "pm", base, X, t),
+               "p_base_exact": float(sc.exact_p(np.array([base]), t)[0]) if t > 0 else sc.p0()}
         th = hit(t, sc.hit_times())
         if th is not None:
             xl, _ = problem.local_arrays(X or problem.X, t)
@@ -130,13 +133,22 @@ class Terzaghi(Scene):
 
     def boundaries(self):
         p = self.p
-        return {"top": lambda x: np.isclose(x[:, 1], p.terzaghi_height),
-                "base": lambda x: np.isclose(x[:, 1], 0.0),
-                "sides": lambda x: np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], p.terzaghi_width)}
+        w = p.terzaghi_width
+        out = {"top": lambda x: np.isclose(x[:, 1], p.terzaghi_height),
+               "base": lambda x: np.isclose(x[:, 1], 0.0),
+               "sides": lambda x: np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], w)}
+        if p.terzaghi_dim == 3:
+            out["front_back"] = lambda x: np.isclose(x[:, 2], 0.0) | np.isclose(x[:, 2], w)
+        return out
 
     def generate_mesh(self, path, size):
         p = self.p
-        return meshing.box(path, [p.terzaghi_width, p.terzaghi_height], size, structured=True)
+        lengths = [p.terzaghi_width, p.terzaghi_height] + [p.terzaghi_width] * (p.terzaghi_dim - 2)
+        return meshing.box(path, lengths, size, structured=True)
+
+    def point(self, y: float) -> tuple:
+        """The point at height y on the column's axis x = 0 (z = 0)."""
+        return (0.0, y) + (0.0,) * (self.p.terzaghi_dim - 2)
 
     # -- reference solution ----------------------------------------------------------
     def t_c(self):
@@ -162,7 +174,9 @@ class Terzaghi(Scene):
         lam = _terms()
         e = np.exp(-lam ** 2 * t / self.t_c()) * 2 / L
         dpdz = self.p0() * np.sum(np.cos(np.multiply.outer(z, lam) / L) * e, axis=-1)
-        return np.stack([np.zeros_like(dpdz), -dpdz], axis=-1)
+        grad = np.zeros(dpdz.shape + (x.shape[-1],))
+        grad[..., 1] = -dpdz
+        return grad
 
     def exact_settlement(self, t):
         p = self.p
@@ -179,15 +193,20 @@ class Terzaghi(Scene):
     def build(self, mesh, degree):
         p = self.p
         model = biot_model(p, mesh, degree, p.terzaghi_pressure_degree, p.biot_stabilization)
-        model.facets.append(pe.traction("u", "top", lambda x, t: np.array([0.0, -p.terzaghi_load])))
+        load = np.zeros(mesh.dim)
+        load[1] = -p.terzaghi_load
+        model.facets.append(pe.traction("u", "top", lambda x, t: load))
         bcs = [Dirichlet("u", "sides", zero, components=(0,)), Dirichlet("u", "base", zero, components=(1,)),
                Dirichlet("pm", "top", zero)]
+        if mesh.dim == 3:
+            bcs.append(Dirichlet("u", "front_back", zero, components=(2,)))
         s_inf = p.terzaghi_load * p.terzaghi_height / constrained_modulus(p)
         scales = {"u": FieldScale(s_inf), "pm": FieldScale(self.p0())}
         # undrained state at t = 0+: uniform p0 and uniform vertical strain
         eps = -p.terzaghi_load * undrained_factor(p)
         rest = p.terzaghi_start == "rest"
-        init = {"u": lambda x: np.column_stack([np.zeros(len(x)), (0.0 if rest else eps) * x[:, 1]]),
+        init = {"u": lambda x: np.column_stack([np.zeros(len(x)), (0.0 if rest else eps) * x[:, 1]] +
+                                               [np.zeros(len(x))] * (mesh.dim - 2)),
                 "pm": lambda x: np.full(len(x), 0.0 if rest else self.p0())}
         return Setup(model, bcs, scales, init, _TerzaghiMonitor(self))
 
