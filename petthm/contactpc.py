@@ -47,8 +47,8 @@ from dataclasses import dataclass
 import numpy as np
 from petsc4py import PETSc
 
-from . import compat
-from .fieldsplit import orthonormal_nullspace, restricted_modes, served_rows
+from . import compat, pmg
+from .fieldsplit import orthonormal_nullspace, served_rows
 
 #: a glued node: |b| above this fraction of the largest |D| (``glue_maps``)
 GLUE_RATIO = 1e-8
@@ -345,7 +345,7 @@ class ContactNullspacePC:
     ``-contact_ksp_type preonly -contact_pc_type gamg``)."""
 
     def __init__(self):
-        self.maps = self.A = self.Z = self.ksp = None
+        self.maps = self.A = self.Z = self.ksp = self._coarse = None
         self._own_maps = False
         self._work: dict = {}
 
@@ -353,45 +353,52 @@ class ContactNullspacePC:
         _, K = pc.getOperators()
         context, rows, maps = served_rows(pc)
         self._release()
-        if maps is None and not _has_lam(context, rows, K.getComm()):
+        comm = K.getComm()
+        if maps is None and not _has_lam(context, rows, comm):
             self.A = K                                           # u alone: its elasticity
             K.incRef()
-            K.setNearNullSpace(restricted_modes(context, rows))
-            self._set_inner(pc, K)
+            self._set_inner(pc, K, context, rows)
             return
         self._own_maps = maps is None
         self.maps = glue_maps(K, context.contact(), rows) if maps is None else maps
         self.A = K.createSubMatrix(self.maps.iu, self.maps.iu)
         self.Z = glued_basis(self.maps, self.A)
         AZ = compat.ptap(self.A, self.Z)
-        AZ.setNearNullSpace(self._rigid_modes(context))
-        self._set_inner(pc, AZ)
+        self._set_inner(pc, AZ, context, self.maps.u_full, self.Z)
         AZ.destroy()
         self._work = {"up": self.A.createVecLeft(), "t": self.A.createVecLeft(), "u": self.A.createVecLeft(),
                       "zr": self.Z.createVecRight(), "v": self.Z.createVecRight(),
                       "s": self.maps.b.duplicate(), "lam": self.maps.b.duplicate()}
 
-    def _rigid_modes(self, context) -> PETSc.NullSpace:
-        """The rigid-body modes of the glued body: Z^T r for the translations
-        and rotations r of the u rows (they are glued displacements)."""
-        iset = _index_set(self.maps.u_full, self.A.getComm())
-        vecs = []
-        for mode in context.rigid_modes():
-            r = mode.getSubVector(iset)
-            v = self.Z.createVecRight()
-            self.Z.multTranspose(r, v)
-            mode.restoreSubVector(iset, r)
-            vecs.append(v)
-        iset.destroy()
-        return orthonormal_nullspace(vecs, self.A.getComm())
-
-    def _set_inner(self, pc, AZ):
-        if self.ksp is None:
-            self.ksp = PETSc.KSP().create(comm=AZ.getComm())
-            self.ksp.setOptionsPrefix((pc.getOptionsPrefix() or "") + "contact_")
-            self.ksp.setType("preonly")
-            self.ksp.getPC().setType("gamg")
+    def _set_inner(self, pc, AZ, context, u_full, Z=None):
+        """The solve of the (glued) elasticity AZ on the u unknowns
+        ``u_full``: its near-nullspace is the rigid-body modes (Z^T r: they
+        are glued displacements); P2 u gets the two-level p-multigrid of
+        ``pmg`` unless ``-contact_pmg 0``, else one GAMG V-cycle."""
+        comm = AZ.getComm()
+        modes = _u_modes(context, u_full, comm)
+        fine = []
+        for r in modes:
+            v = AZ.createVecRight()
+            Z.multTranspose(r, v) if Z is not None else r.copy(v)
+            fine.append(v)
+        AZ.setNearNullSpace(orthonormal_nullspace(fine, comm))
+        if self.ksp is not None:
+            self.ksp.destroy()
+        prefix = (pc.getOptionsPrefix() or "") + "contact_"
+        self.ksp = PETSc.KSP().create(comm=comm)
+        self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(AZ)
+        self.ksp.setType("preonly")
+        interp = context.p1_interpolation()
+        if interp is not None and PETSc.Options(prefix).getBool("pmg", True):
+            P, coarse = pmg.glued_interpolation(interp, u_full, Z, comm)
+            self._coarse = pmg.set_two_level(self.ksp, AZ, P, [coarse(r) for r in modes])
+            P.destroy()
+        else:
+            self.ksp.getPC().setType("gamg")
+        for r in modes:
+            r.destroy()
         self.ksp.setFromOptions()
         self.ksp.setUp()
 
@@ -428,9 +435,10 @@ class ContactNullspacePC:
         for v in self._work.values():
             v.destroy()
         self._work = {}
-        for obj in (self.A, self.Z):
+        for obj in (self.A, self.Z, self._coarse):
             if obj is not None:
                 obj.destroy()
+        self._coarse = None
         if self.maps is not None and self._own_maps:
             self.maps.destroy()
         self.maps = self.A = self.Z = None
@@ -440,6 +448,18 @@ class ContactNullspacePC:
         if self.ksp is not None:
             self.ksp.destroy()
             self.ksp = None
+
+
+def _u_modes(context, u_full: np.ndarray, comm) -> list[PETSc.Vec]:
+    """The rigid-body modes on the u unknowns ``u_full`` (copies)."""
+    iset = _index_set(u_full, comm)
+    out = []
+    for mode in context.rigid_modes():
+        sub = mode.getSubVector(iset)
+        out.append(sub.copy())
+        mode.restoreSubVector(iset, sub)
+    iset.destroy()
+    return out
 
 
 def _has_lam(context, rows: np.ndarray, comm) -> bool:

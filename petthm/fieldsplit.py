@@ -47,6 +47,7 @@ class SolverContext:
         self.fields = {name: iset.getIndices().copy() for name, iset in zip(names, isets)}
         self._contact = None
         self._rigid = None
+        self._interp = False                      # not made yet (None: u is not P2)
 
     def rows(self, P: PETSc.Mat) -> np.ndarray:
         """The full-system unknowns of the operator's rows on this rank: the
@@ -74,7 +75,18 @@ class SolverContext:
             self._rigid = _rigid_mode_vectors(self.problem)
         return self._rigid
 
+    def p1_interpolation(self):
+        """The P1 -> P2 interpolation of u (``pmg.p1_interpolation``), made
+        once; None when u is not P2."""
+        if self._interp is False:
+            from .pmg import p1_interpolation
+            self._interp = p1_interpolation(self.problem)
+        return self._interp
+
     def destroy(self) -> None:
+        if self._interp:
+            self._interp[0].destroy()
+        self._interp = False
         if self._contact is not None:
             self._contact.destroy()
         for v in self._rigid or ():
@@ -248,8 +260,10 @@ class VIFieldSplit:
         opts = PETSc.Options(self.inner.getOptionsPrefix())
         extra = context.problem.preconditioner_blocks() if opts.getBool("fixed_stress", True) else None
         glue = maps if opts.getBool("contact_schur", True) else None
+        mech = "u" in context.fields and P.getComm().tompi4py().allreduce(
+            int(np.isin(context.fields["u"], splits[0].rows).any()), op=_mpi_max()) > 0
         for split in splits[1:]:                                # their preconditioning blocks
-            Sp = split_block(P, split, rows, context, glue, extra)
+            Sp = split_block(P, split, rows, context, glue, extra) if mech else None
             if Sp is not None:
                 split.iset.compose("pmat", Sp)
                 self._owned.append(Sp)
@@ -310,9 +324,11 @@ class VIFieldSplit:
 
 def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None,
                 extra: PETSc.Mat | None = None) -> PETSc.Mat | None:
-    """The preconditioning block of ``split`` (see ``VIFieldSplit``):
+    """The preconditioning block of ``split`` when the first split holds
+    the mechanics (see ``VIFieldSplit``): an approximation of its Schur
+    complement A_ss - A_s,m K^-1 A_m,s with respect to the mechanics m,
 
-        S = A_ss - A_s,lam G A_u,s + E_ss
+        S = A_ss - A_s,lam G A_u,s  [- A_s,u' diag(A_u'u')^-1 A_u',s]  + E_ss
 
     * A_s,lam G A_u,s (with the contact ``maps`` of the {u, lam} split, G
       their lam-recovery map): the {u, lam} split answers a load on the
@@ -322,37 +338,52 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
       lumped weights: lam changes by -p and u does not move, so the
       fracture storage gains the joint compliance d(ac)/d(lam) that the
       pressure rows see through lam (the fracture analogue of fixed stress);
+    * A_s,u diag(A_uu)^-1 A_u,s: what the displacement gives of the rest
+      (the opening of the open fracture faces under the fluid pressure),
+      with the elasticity by its diagonal ("selfp"); not where the model
+      has a block of its own for the field;
     * E (``extra``, full-system numbering): the model's preconditioner
       blocks (``Problem.preconditioner_blocks``: the fixed-stress term).
 
-    None when neither applies (the block stays A_ss)."""
+    None when no term applies (the block stays A_ss)."""
     comm = P.getComm()
     r0 = P.getOwnershipRange()[0]
     has_extra = extra is not None and comm.tompi4py().allreduce(
-        int(np.isin(split.rows, _rows_of(extra)).any()), op=_mpi_max())
-    if maps is None and not has_extra:
-        return None
+        int(np.isin(split.rows, _rows_of(extra)).any()), op=_mpi_max()) > 0
 
     def positions(field):
         return PETSc.IS().createGeneral(
             (np.flatnonzero(np.isin(rows, context.fields[field])) + r0).astype(compat.INT), comm=comm)
+    iu = positions("u")
     S = P.createSubMatrix(split.iset, split.iset)
+    Aus = P.createSubMatrix(iu, split.iset)
+    terms = []
     if maps is not None:
-        iu, ilam = positions("u"), positions("lam")
+        ilam = positions("lam")
         Asl = P.createSubMatrix(split.iset, ilam)
-        Aus = P.createSubMatrix(iu, split.iset)
         G = maps.recovery()
         GA = G.matMult(Aus)
-        corr = Asl.matMult(GA)
-        S.axpy(-1.0, corr, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        for obj in (iu, ilam, Asl, Aus, G, GA, corr):
+        terms.append((-1.0, Asl.matMult(GA)))
+        for obj in (ilam, Asl, G, GA):
             obj.destroy()
     if has_extra:
         full = PETSc.IS().createGeneral(split.rows.astype(compat.INT), comm=comm)
-        E = extra.createSubMatrix(full, full)
-        S.axpy(1.0, E, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        E.destroy()
+        terms.append((1.0, extra.createSubMatrix(full, full)))
         full.destroy()
+    else:
+        Asu = P.createSubMatrix(split.iset, iu)
+        Auu = P.createSubMatrix(iu, iu)
+        dinv = Auu.getDiagonal()
+        dinv.reciprocal()
+        Aus.diagonalScale(L=dinv)
+        terms.append((-1.0, Asu.matMult(Aus)))
+        for obj in (Asu, Auu, dinv):
+            obj.destroy()
+    for a, T in terms:
+        S.axpy(a, T, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        T.destroy()
+    iu.destroy()
+    Aus.destroy()
     return S
 
 
