@@ -9,7 +9,7 @@
   r < 0.95 R (verification.md section 4), with each run's wall time.
 * ``vi``: ``partial_opening`` on three meshes with both VI Newton methods
   (vinewtonrsls, vinewtonssls), with the direct solver and with the
-  field-split recipe options/solvers/fieldsplit_contact.opts: Newton and
+  block preconditioner options/solvers/block.opts: Newton and
   Krylov iterations per step,
   failed solves, the end of the open zone and the opening at the centre,
   and the largest difference of the opening profile from the finest mesh.
@@ -36,7 +36,7 @@ VI_SIZES = [0.05, 0.025, 0.0125]
 MANDEL_SIZES = [1.0, 0.5, 0.25]
 VI_METHODS = ["vinewtonrsls", "vinewtonssls"]
 VI_SOLVERS = {"direct": [], "fieldsplit": ["-options_file", os.path.join(ROOT, "options", "solvers",
-                                                                         "fieldsplit_contact.opts")]}
+                                                                         "block.opts")]}
 
 
 def sneddon_study(out):

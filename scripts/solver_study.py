@@ -7,7 +7,7 @@ and rank counts; CSV and a markdown table of what each costs.
 * ``--levels``: the mesh refinement levels, each a string of petthm options
   (e.g. ``-thm_mesh_size 40`` or ``-dm_refine 1``), separated by ``;``.
 * ``--solvers``: named option sets, ``NAME=OPTIONS`` separated by ``;``;
-  OPTIONS may hold ``-options_file FILE`` (e.g. ``options/solvers/fieldsplit.opts``).
+  OPTIONS may hold ``-options_file FILE`` (e.g. ``options/solvers/block.opts``).
 * ``--common``: options of every run (final time, scene options).
 * ``--ranks``: rank counts (``mpiexec -n``).
 
@@ -20,7 +20,7 @@ CSV).  Example (partial_opening, the direct solve and the contact field split, t
 
     python scripts/solver_study.py partial_opening \\
         --levels "-thm_partial_crack_size 0.05;-thm_partial_crack_size 0.025" \\
-        --solvers "lu=;split=-options_file options/solvers/fieldsplit_contact.opts" --ranks 1
+        --solvers "lu=;block=-options_file options/solvers/block.opts" --ranks 1
 """
 from __future__ import annotations
 

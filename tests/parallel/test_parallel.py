@@ -16,7 +16,7 @@ def solver_without_parallel_direct() -> tuple:
     from petsc4py import PETSc
     if any(PETSc.Sys.hasExternalPackage(p) for p in ("mumps", "superlu_dist")):
         return ()
-    return ("-options_file", f"{ROOT}/options/solvers/fieldsplit_contact.opts")
+    return ("-options_file", f"{ROOT}/options/solvers/block.opts")
 
 
 def final_field(outdir, name="Tm"):
