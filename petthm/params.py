@@ -192,3 +192,6 @@ class RunParams:
                           "fails: on, off, or auto (on for a direct solve)", choices=("auto", "on", "off"))
     pc_reuse_max_krylov: int = param(0, "-", "rebuild a reused preconditioner after a linear solve with "
                                      "more iterations than this (0: the cost rule of -thm_pc_reuse)", lo=0)
+    direct_max_unknowns: int = param(50000, "-", "scenes with displacement propose the block "
+                                     "preconditioner of options/solvers/block.opts above this many "
+                                     "unknowns and a direct solve up to it (docs/solvers.md)", lo=0)

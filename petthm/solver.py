@@ -62,6 +62,36 @@ def direct_solver_defaults(comm) -> dict[str, str]:
     return dict(out, pc_type="redundant", redundant_pc_type="lu", mat_no_inode="", **redundant)
 
 
+#: the block preconditioner of options/solvers/block.opts (docs/solvers.md), proposed by
+#: ``solver_defaults_by_size`` for large problems with displacement; a test keeps the two equal
+BLOCK_RECIPE = {
+    "ksp_type": "fgmres",
+    "ksp_rtol": "1e-10",
+    "ksp_max_it": "500",
+    "ksp_gmres_restart": "100",
+    "pc_type": "python",
+    "pc_python_type": "petthm.fieldsplit.VIFieldSplit",
+    "vi_groups": "mech=u+lam,pm=pm,pf=pf,Tf=Tf,Tm=Tm",
+    "vi_pc_fieldsplit_type": "multiplicative",
+    "vi_fieldsplit_mech_ksp_type": "preonly",
+    "vi_fieldsplit_mech_pc_type": "python",
+    "vi_fieldsplit_mech_pc_python_type": "petthm.contactpc.ContactNullspacePC",
+    **{f"vi_fieldsplit_{f}_{k}": v for f in ("pm", "pf", "Tf", "Tm")
+       for k, v in (("ksp_type", "preonly"), ("pc_type", "gamg"))},
+}
+
+
+def solver_defaults_by_size(scene_defaults: dict[str, str], has_displacement: bool, unknowns: int,
+                            direct_max: int) -> dict[str, str]:
+    """The scene's solver defaults, with the block preconditioner in place of
+    its linear solver when the problem has displacement and more than
+    ``direct_max`` unknowns (-thm_direct_max_unknowns): a direct solve's
+    memory and time grow faster than the problem."""
+    if not has_displacement or unknowns <= direct_max:
+        return scene_defaults
+    return dict(scene_defaults, **BLOCK_RECIPE)
+
+
 #: option names petthm inserted itself (never reported as unused)
 PROPOSED: set[str] = set()
 

@@ -100,9 +100,10 @@ RENAMED = {
 #: -thm_initial_pressure replaced -thm_sneddon_net_pressure; default net pressure 1e6 over 2e6)
 ADDED = {"sneddon_3d": ["-thm_initial_pressure", 3e6]}
 
-#: summary keys that are not results
+#: summary keys that are not results (versions, provenance, and the solver's costs: times,
+#: memory, preconditioner rebuilds, which differ from run to run)
 SKIP = ("petthm_version", "petsc_version", "petsc4py_version", "wall_time", "provenance", "parameters",
-        "options", "git_commit", "reason")
+        "options", "git_commit", "reason", "solver_costs", "peak_memory_mb", "pc_rebuilds_forced")
 #: magnitudes below this are round-off (in SI units, all of petthm's monitored quantities are larger)
 FLOOR = 1e-11
 #: cases solved iteratively (GMRES + GAMG to the default snes/ksp tolerances of 1e-10): compared at

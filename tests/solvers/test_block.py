@@ -89,3 +89,33 @@ def test_partial_opening_serial_and_parallel(tmp_path, method):
         assert abs(s["opening_centre"] - ref["opening_centre"]) <= 1e-8 * ref["opening_centre"]
         newton[n] = s["snes_iterations"]
     assert newton[1] == newton[2]
+
+
+def test_the_recipe_file_is_the_size_default():
+    """options/solvers/block.opts and the recipe petthm proposes above
+    -thm_direct_max_unknowns are the same options."""
+    from petthm.solver import BLOCK_RECIPE
+    opts = {}
+    for line in open(f"{ROOT}/options/solvers/block.opts"):
+        line = line.split("#")[0].split()
+        if line:
+            opts[line[0].lstrip("-")] = line[1] if len(line) > 1 else ""
+    assert opts == BLOCK_RECIPE
+
+
+def test_large_problems_get_the_block_preconditioner(tmp_path):
+    """Above -thm_direct_max_unknowns a scene with displacement proposes the
+    block preconditioner (the summary's options say so); below it the
+    direct solve; the user's own choice wins."""
+    common = ("-thm_partial_crack_size", 0.05, "-thm_fe_degree", 1, "-thm_final_time", 0.2)
+    _, small = run_petthm("partial_opening", tmp_path / "small", *common)
+    _, large = run_petthm("partial_opening", tmp_path / "large", *common, "-thm_direct_max_unknowns", 100)
+    _, mine = run_petthm("partial_opening", tmp_path / "mine", *common, "-thm_direct_max_unknowns", 100,
+                         "-pc_type", "lu", "-ksp_type", "gmres")
+    effective = {k: {o.lstrip("-"): v for o, v in s["provenance"]["options"].items()}
+                 for k, s in (("small", small), ("large", large), ("mine", mine))}
+    print({k: (v.get("pc_type"), v.get("ksp_type")) for k, v in effective.items()})
+    assert effective["small"]["pc_type"] == "lu"
+    assert effective["large"]["pc_type"] == "python" and effective["large"]["ksp_type"] == "fgmres"
+    assert effective["mine"]["pc_type"] == "lu"
+    assert small["opening_centre"] == pytest.approx(large["opening_centre"], rel=1e-8)
