@@ -118,7 +118,7 @@ def bench(path, model, repeat):
     asm = Assembler(disc, model, {name: FieldScale()})
     t0 = time.perf_counter()
     A = dm.createMat()
-    compat.coo_preallocate(A, asm.coo_rows, asm.coo_cols)
+    compat.coo_preallocate(A, *asm.coo_pattern())
     t_prealloc = time.perf_counter() - t0
     rng = np.random.default_rng(0)
     xl = rng.standard_normal(disc.nlocal)
@@ -142,7 +142,7 @@ def bench(path, model, repeat):
     pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(8)
     info = A.getInfo()
     return dict(cells=mesh.ncells, dofs=A.getSize()[0], nnz=int(info["nz_used"]),
-                coo_entries=asm.coo_rows.size, t_prealloc=t_prealloc, t_jacobian=t_jac,
+                coo_entries=asm.nnz, t_prealloc=t_prealloc, t_jacobian=t_jac,
                 t_residual=t_res), s.getvalue()
 
 

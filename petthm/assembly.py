@@ -75,6 +75,27 @@ class _FacetBatch:
     tabs: dict
 
 
+class _KeptWriter:
+    """Writes consecutive pieces of the full COO value sequence into ``out``,
+    keeping the entries ``keep`` marks (in place: no full-length copy)."""
+
+    def __init__(self, out: np.ndarray, keep: np.ndarray):
+        self.out, self.keep = out, keep
+        self.pos = self.kpos = 0
+        self.all = bool(keep.all())
+
+    def put(self, values: np.ndarray) -> None:
+        n = values.size
+        if self.all:
+            self.out[self.kpos:self.kpos + n] = values
+            self.kpos += n
+        else:
+            kept = values[self.keep[self.pos:self.pos + n]]
+            self.out[self.kpos:self.kpos + kept.size] = kept
+            self.kpos += kept.size
+        self.pos += n
+
+
 class Assembler:
     """Residual and Jacobian of a ``Model`` on a ``Discretisation``."""
 
@@ -159,27 +180,35 @@ class Assembler:
         return R.ravel(), C.ravel()
 
     def _build_pattern(self):
-        """COO rows and columns in the order ``jacobian_values`` fills them:
-        chunk by chunk, every block of a chunk, then the facet terms."""
-        rows, cols = [], []
+        """Which COO entries of ``jacobian_values``'s order (chunk by chunk,
+        every block of a chunk, then the facet terms) are unknowns' entries
+        (constrained rows and columns have negative indices); the pattern
+        itself is made again when a matrix is created (``coo_pattern``) and
+        not kept: it is 16 bytes per entry."""
+        keep = [(r >= 0) & (c >= 0) for r, c in self._pattern_parts()]
+        self._keep = np.concatenate(keep) if keep else np.zeros(0, dtype=bool)
+        self.nnz = int(self._keep.sum())
+        self._all_kept = bool(self._keep.all())
+
+    def _pattern_parts(self):
         for cells in self._chunks():
             for jb in self.model.jacobians:
-                r, c = self._block_index(jb.test, jb.trial, cells)
-                rows.append(r)
-                cols.append(c)
+                yield self._block_index(jb.test, jb.trial, cells)
         for ft in self.model.facets:
             if ft.g0 is None:
                 continue
             for fb in self._facets[ft.boundary]:
-                r, c = self._block_index(ft.field, ft.field, fb.cells)
-                rows.append(r)
-                cols.append(c)
-        rows = np.concatenate(rows) if rows else np.zeros(0, compat.INT)
-        cols = np.concatenate(cols) if cols else np.zeros(0, compat.INT)
-        self._keep = (rows >= 0) & (cols >= 0)
-        self.coo_rows = rows[self._keep]
-        self.coo_cols = cols[self._keep]
-        self._all_kept = bool(self._keep.all())
+                yield self._block_index(ft.field, ft.field, fb.cells)
+
+    def coo_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """Global COO rows and columns of the unknowns' entries, in the order
+        ``jacobian_values`` fills them."""
+        parts = list(self._pattern_parts())
+        if not parts:
+            return np.zeros(0, compat.INT), np.zeros(0, compat.INT)
+        rows = np.concatenate([r for r, _ in parts])
+        cols = np.concatenate([c for _, c in parts])
+        return rows[self._keep], cols[self._keep]
 
     # -- residual -------------------------------------------------------------
     def _chunks(self):
@@ -217,18 +246,18 @@ class Assembler:
         out += np.bincount(idx, weights=np.ravel(r) * self.inv_rscale[idx], minlength=out.size)
 
     # -- Jacobian -------------------------------------------------------------
-    def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
-        """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot."""
-        out = np.empty(self._keep.size)
-        pos = 0
+    def jacobian_values(self, xl, xdl, t, shift, out: np.ndarray | None = None) -> np.ndarray:
+        """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot, the
+        unknowns' entries only (``coo_pattern``), written into ``out`` (of
+        ``nnz`` entries) when it is given."""
+        out = np.empty(self.nnz) if out is None else out
+        writer = _KeptWriter(out, self._keep)
         for cells in self._chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
             for jb in self.model.jacobians:
                 K = self._cell_block(jb, ctx, cells)
                 rowfac = self.inv_rscale[self.dofs(jb.test)[cells]] * self.scale(jb.trial).scale
-                K = (K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel()
-                out[pos:pos + K.size] = K
-                pos += K.size
+                writer.put((K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel())
         for ft in self.model.facets:
             if ft.g0 is None:
                 continue
@@ -238,10 +267,8 @@ class Assembler:
                 phi = fb.tabs[self.disc.field(ft.field).degree].phi
                 K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi)
                 rowfac = self.inv_rscale[self.dofs(ft.field)[fb.cells]] * sc.scale
-                K = (K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel()
-                out[pos:pos + K.size] = K
-                pos += K.size
-        return out if self._all_kept else out[self._keep]
+                writer.put((K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel())
+        return out
 
     @staticmethod
     def _mass_like(g0w, phiF, phiG):

@@ -58,6 +58,7 @@ class Problem:
         self._pc_blocks: PETSc.Mat | None = None
         self._pc_assemblers: list[Assembler] = []
         self._jacobian_point = None               # (xl, xdl, t, shift) of the last Jacobian
+        self._jvals: np.ndarray | None = None     # the Jacobian's COO values (reused buffer)
         self._ev_res = PETSc.Log.Event("thm.residual")
         self._ev_jac = PETSc.Log.Event("thm.jacobian")
 
@@ -159,10 +160,22 @@ class Problem:
         self._ev_res.end()
 
     def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
-        vals = [a.jacobian_values(xl, xdl, t, shift) for a in self.assemblers.values()]
-        vals += [p.jacobian_values(xl, t, self.scales, self.inv_rscale) for p in self.points]
-        vals.append(np.zeros(len(self._diagonal)))
-        return np.concatenate(vals)
+        """The COO values of the Jacobian in ``create_matrix``'s order, in one
+        buffer kept across calls (each assembler writes its own slice)."""
+        sizes = [a.nnz for a in self.assemblers.values()] + [len(p.coo_rows) for p in self.points] + \
+            [len(self._diagonal)]
+        if self._jvals is None or self._jvals.size != sum(sizes):
+            self._jvals = np.empty(sum(sizes))
+        pos = 0
+        for a in self.assemblers.values():
+            a.jacobian_values(xl, xdl, t, shift, out=self._jvals[pos:pos + a.nnz])
+            pos += a.nnz
+        for p in self.points:
+            v = p.jacobian_values(xl, t, self.scales, self.inv_rscale)
+            self._jvals[pos:pos + v.size] = v
+            pos += v.size
+        self._jvals[pos:] = 0.0
+        return self._jvals
 
     def ijacobian(self, ts, t, X, Xdot, shift, J, P):
         self._ev_jac.begin()
@@ -177,11 +190,13 @@ class Problem:
     def create_matrix(self) -> PETSc.Mat:
         """The Jacobian matrix (created once, with its COO pattern)."""
         if self.J is None:
-            asm = self.assemblers.values()
-            rows = [a.coo_rows for a in asm] + [p.coo_rows for p in self.points] + [self._diagonal]
-            cols = [a.coo_cols for a in asm] + [p.coo_cols for p in self.points] + [self._diagonal]
+            patterns = [a.coo_pattern() for a in self.assemblers.values()] + \
+                [(p.coo_rows, p.coo_cols) for p in self.points] + [(self._diagonal, self._diagonal)]
+            rows = np.concatenate([r for r, _ in patterns])
+            cols = np.concatenate([c for _, c in patterns])
+            del patterns
             self.J = self.dm.createMat()
-            compat.coo_preallocate(self.J, np.concatenate(rows), np.concatenate(cols))
+            compat.coo_preallocate(self.J, rows, cols)
         return self.J
 
     def preconditioner_blocks(self) -> PETSc.Mat | None:
@@ -196,8 +211,9 @@ class Problem:
             self._pc_assemblers = [Assembler(self.disc, terms, self.scales, region=r,
                                              inv_rscale=self.inv_rscale) for r in regions]
             self._pc_blocks = self.dm.createMat()
-            compat.coo_preallocate(self._pc_blocks, np.concatenate([a.coo_rows for a in self._pc_assemblers]),
-                                   np.concatenate([a.coo_cols for a in self._pc_assemblers]))
+            patterns = [a.coo_pattern() for a in self._pc_assemblers]
+            compat.coo_preallocate(self._pc_blocks, np.concatenate([r for r, _ in patterns]),
+                                   np.concatenate([c for _, c in patterns]))
         xl, xdl, t, shift = self._jacobian_point
         compat.coo_set_values(self._pc_blocks, np.concatenate(
             [a.jacobian_values(xl, xdl, t, shift) for a in self._pc_assemblers]))
