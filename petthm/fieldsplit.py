@@ -63,7 +63,7 @@ class SolverContext:
     def contact(self):
         """The contact pairs (``contactpc.ContactStructure``), made once."""
         if self._contact is None:
-            from .contactpc import contact_structure
+            from .glue import contact_structure
             self._contact = contact_structure(self.problem)
         return self._contact
 
@@ -150,14 +150,20 @@ def field_splits(context: SolverContext, rows: np.ndarray | None = None, r0: int
 def restricted_modes(context: SolverContext, rows: np.ndarray) -> PETSc.NullSpace:
     """The rigid-body modes on the full-system unknowns ``rows`` (this
     rank's, u only), orthonormalised."""
+    return orthonormal_nullspace(mode_vectors(context, rows), context.problem.dm.comm)
+
+
+def mode_vectors(context: SolverContext, rows: np.ndarray) -> list[PETSc.Vec]:
+    """The rigid-body modes on the full-system unknowns ``rows`` (this
+    rank's, sorted, u only): new vectors in the numbering of those rows."""
     iset = PETSc.IS().createGeneral(np.asarray(rows, dtype=compat.INT), comm=context.problem.dm.comm)
-    vecs = []
+    out = []
     for mode in context.rigid_modes():
         sub = mode.getSubVector(iset)
-        vecs.append(sub.copy())
+        out.append(sub.copy())
         mode.restoreSubVector(iset, sub)
     iset.destroy()
-    return orthonormal_nullspace(vecs, context.problem.dm.comm)
+    return out
 
 
 def _rigid_mode_vectors(problem) -> list[PETSc.Vec]:
@@ -278,7 +284,7 @@ class VIFieldSplit:
         held = [int(np.isin(context.fields[f], first).sum()) for f in ("u", "lam")]
         if min(P.getComm().tompi4py().allreduce(n) for n in held) == 0:
             return None
-        from .contactpc import glue_maps
+        from .glue import glue_maps
         K = P.createSubMatrix(splits[0].iset, splits[0].iset)
         maps = glue_maps(K, context.contact(), first)
         K.destroy()
