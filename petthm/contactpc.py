@@ -61,6 +61,7 @@ class ContactNullspacePC:
 
     def __init__(self):
         self.maps = self.A = self.Z = self.ksp = self._coarse = None
+        self.B = self.C = self.e_over_d = None
         self._own_maps = False
         self._work: dict = {}
 
@@ -81,13 +82,34 @@ class ContactNullspacePC:
         self._own_maps = maps is None
         self.maps = glue_maps(K, context.contact(), rows) if maps is None else maps
         self.A = K.createSubMatrix(self.maps.iu, self.maps.iu)
+        self._eliminate(K)
         self.Z = glued_basis(self.maps, self.A)
         AZ = compat.ptap(self.A, self.Z)
         self._set_inner(pc, AZ, context, self.maps.u_full, self.Z)
         AZ.destroy()
         self._work = {"up": self.A.createVecLeft(), "t": self.A.createVecLeft(), "u": self.A.createVecLeft(),
+                      "ru": self.A.createVecLeft(),
                       "zr": self.Z.createVecRight(), "v": self.Z.createVecRight(),
                       "s": self.maps.b.duplicate(), "lam": self.maps.b.duplicate()}
+
+    def _eliminate(self, K):
+        """Eliminate the lam rows the glue does not hold (open nodes, and the
+        semismooth rows in transition of ``vinewtonssls``: D lam + B u = r
+        with D != 0) exactly: lam_E = D^-1 (r_E - B_E u), so the
+        elasticity becomes A - C_E D_E^-1 B_E (a normal stiffness on those
+        pairs) and the u residual loses C_E D_E^-1 r_E."""
+        m = self.maps
+        e = 1.0 - m.glued.getArray(readonly=True)
+        self.e_over_d = m.diag.duplicate()
+        self.e_over_d.getArray()[:] = e / _safe(m.diag.getArray(readonly=True))
+        self.B = K.createSubMatrix(m.ilam, m.iu)
+        self.C = K.createSubMatrix(m.iu, m.ilam)
+        Bs = self.B.copy()
+        Bs.diagonalScale(L=self.e_over_d)
+        CB = self.C.matMult(Bs)
+        self.A.axpy(-1.0, CB, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        for obj in (Bs, CB):
+            obj.destroy()
 
     def _set_inner(self, pc, AZ, context, u_full, Z=None):
         """The solve of the (glued) elasticity AZ on the u unknowns
@@ -132,20 +154,24 @@ class ContactNullspacePC:
         xu, xl = x.getSubVector(m.iu), x.getSubVector(m.ilam)
         g = m.glued.getArray(readonly=True)
         r_lam = xl.getArray(readonly=True)
+        w["s"].getArray()[:] = self.e_over_d.getArray(readonly=True) * r_lam
+        self.C.mult(w["s"], w["ru"])
+        w["ru"].aypx(-1.0, xu)                                   # r_u - C_E D_E^-1 r_E
         w["s"].getArray()[:] = g * r_lam / _safe(m.b.getArray(readonly=True))
         m.pt.multTranspose(w["s"], w["up"])                      # 1. u_p = P (r_lam / b)
         self.A.mult(w["up"], w["t"])
-        w["t"].aypx(-1.0, xu)                                    # 2. r_u - A u_p
+        w["t"].aypx(-1.0, w["ru"])                               # 2. r_u - A u_p
         self.Z.multTranspose(w["t"], w["zr"])
         self.ksp.solve(w["zr"], w["v"])
         self.Z.mult(w["v"], w["u"])
         w["u"].axpy(1.0, w["up"])                                #    u = Z v + u_p
         self.A.mult(w["u"], w["t"])
-        w["t"].aypx(-1.0, xu)                                    # 3. the force the glue carries
+        w["t"].aypx(-1.0, w["ru"])                               # 3. the force the glue carries
         m.pt.mult(w["t"], w["lam"])
+        self.B.mult(w["u"], w["s"])                              #    and B u of the eliminated rows
         lam = w["lam"].getArray()
         lam[:] = g * lam / _safe(m.c.getArray(readonly=True)) + \
-            (1.0 - g) * r_lam / _safe(m.diag.getArray(readonly=True))
+            self.e_over_d.getArray(readonly=True) * (r_lam - w["s"].getArray(readonly=True))
         x.restoreSubVector(m.iu, xu)
         x.restoreSubVector(m.ilam, xl)
         for iset, v in ((m.iu, w["u"]), (m.ilam, w["lam"])):
@@ -157,10 +183,10 @@ class ContactNullspacePC:
         for v in self._work.values():
             v.destroy()
         self._work = {}
-        for obj in (self.A, self.Z, self._coarse):
+        for obj in (self.A, self.Z, self._coarse, self.B, self.C, self.e_over_d):
             if obj is not None:
                 obj.destroy()
-        self._coarse = None
+        self._coarse = self.B = self.C = self.e_over_d = None
         if self.maps is not None and self._own_maps:
             self.maps.destroy()
         self.maps = self.A = self.Z = None

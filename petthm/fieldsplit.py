@@ -367,7 +367,7 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
     if maps is not None:
         ilam = positions("lam")
         Asl = P.createSubMatrix(split.iset, ilam)
-        G = maps.recovery()
+        G = maps.recovery(coupled=True)
         GA = G.matMult(Aus)
         terms.append((-1.0, Asl.matMult(GA)))
         for obj in (ilam, Asl, G, GA):

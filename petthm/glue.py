@@ -22,8 +22,11 @@ from petsc4py import PETSc
 
 from . import compat
 
-#: a glued node: |b| above this fraction of the largest |D| (``glue_maps``)
-GLUE_RATIO = 1e-8
+#: a lam row with a diagonal D (the semismooth row of ``vinewtonssls``) is
+#: glued when eliminating it would add a normal stiffness b c / D above this
+#: multiple of the elasticity's own at its node (then it is a constraint to
+#: within 1 %), and eliminated exactly otherwise (``glue_maps``)
+STIFF_RATIO = 100.0
 
 
 @dataclass
@@ -110,14 +113,22 @@ class GlueMaps:
     diag: PETSc.Vec
     code: PETSc.Vec
 
-    def recovery(self) -> PETSc.Mat:
+    def recovery(self, coupled: bool = False) -> PETSc.Mat:
         """G = diag(glued / c) P^T (lam x u): lam from the normal force the
-        glue carries (step 3 of the module docstring)."""
+        glue carries (step 3 of ``contactpc``'s docstring).  ``coupled``:
+        every row with a weak opening (b != 0), glued or not: the Schur
+        terms of ``fieldsplit.split_block`` take the contact traction of
+        the rows the contact PC eliminates (the semismooth rows in
+        transition) as if the glue carried the load too, so that a fracture
+        pressure keeps the storage of the joint's compliance there."""
         G = self.pt.copy()
-        s, c = self.glued.duplicate(), _nonzero(self.c)
-        s.pointwiseDivide(self.glued, c)
-        G.diagonalScale(L=s)
-        s.destroy()
+        mask = self.glued.duplicate()
+        mask.getArray()[:] = (self.b.getArray(readonly=True) != 0.0) if coupled else \
+            self.glued.getArray(readonly=True)
+        c = _nonzero(self.c)
+        mask.pointwiseDivide(mask, c)
+        G.diagonalScale(L=mask)
+        mask.destroy()
         c.destroy()
         return G
 
@@ -159,14 +170,39 @@ def glue_maps(K: PETSc.Mat, structure: ContactStructure, rows: np.ndarray) -> Gl
     C.multTranspose(w, c)
     D = K.createSubMatrix(ilam, ilam)
     diag = D.getDiagonal()
-    big = comm.tompi4py().allreduce(float(np.abs(diag.getArray()).max(initial=0.0)), op=_mpi_max())
-    ba, da = np.abs(b.getArray()), np.abs(diag.getArray())
     glued = b.duplicate()
-    glue = (ba > GLUE_RATIO * max(big, 1e-300)) | ((da <= 1e-12 * ba) & (ba > 0))
-    glued.getArray()[:] = glue.astype(float)
+    glued.getArray()[:] = _glued_rows(K, iu, st, b, c, diag).astype(float)
     for obj in (B, C, D, ones, w):
         obj.destroy()
     return GlueMaps(iu, ilam, rows[is_u].copy(), st, pt, glued, b, c, diag, code)
+
+
+def _glued_rows(K: PETSc.Mat, iu: PETSc.IS, st: PETSc.Mat, b: PETSc.Vec, c: PETSc.Vec,
+                diag: PETSc.Vec) -> np.ndarray:
+    """Which lam rows the glue holds: those with a weak opening (b != 0) and
+    no diagonal, or one so small that eliminating the row would add a
+    normal stiffness k = |b c / D| above ``STIFF_RATIO`` times the mean
+    diagonal of the elasticity at the row's pair (``vinewtonssls``'s rows
+    of closed nodes); the others (open nodes, and the nodes in transition
+    of ``vinewtonssls``) are eliminated exactly by the contact PC."""
+    dK = K.getDiagonal()
+    dA = dK.getSubVector(iu)
+    absd = dA.copy()
+    absd.abs()
+    dK.restoreSubVector(iu, dA)
+    pat = _pattern(st)
+    total, count = b.duplicate(), b.duplicate()
+    pat.mult(absd, total)
+    ones = absd.duplicate()
+    ones.set(1.0)
+    pat.mult(ones, count)
+    a = total.getArray(readonly=True) / np.maximum(count.getArray(readonly=True), 1.0)
+    ba, ca, da = (np.abs(v.getArray(readonly=True)) for v in (b, c, diag))
+    stiff = ba * ca > STIFF_RATIO * a * da
+    out = (ba > 0) & ((da == 0) | stiff)
+    for obj in (dK, absd, pat, total, count, ones):
+        obj.destroy()
+    return out
 
 
 def _normals_from_opening(B: PETSc.Mat, code: PETSc.Vec) -> np.ndarray:
