@@ -116,10 +116,14 @@ def test_vi_fieldsplit_contact_patch(tmp_path, method):
 def test_vi_fieldsplit_fracture_inflation(tmp_path, method):
     """fracture_inflation (u, lam, pf: the crack opens under injection; P1 u,
     see test_vi_fieldsplit_contact_patch) with the block recipe: <= 15 Newton
-    iterations per step and the injection pressure of the direct solve with
-    the same VI method."""
+    iterations per step, and the final injection pressure and opening of
+    the direct solve with the same VI method.  The step histories are not
+    compared row by row: at the crack's opening the VI Newton path can
+    branch (measured: the direct solve took 36 or 76 steps depending on the
+    machine's load, through the time-based rebuilds of its reused
+    factorisation; the final values differ by 5e-8 and 6e-6)."""
     common = ("-thm_fe_degree", 1, "-snes_type", method)
-    run_petthm("fracture_inflation", tmp_path / "direct", *common)
+    _, ref = run_petthm("fracture_inflation", tmp_path / "direct", *common)
     out = tmp_path / method
     _, s = run_petthm("fracture_inflation", out, *common, "-options_file",
                       f"{ROOT}/options/solvers/block.opts")
@@ -127,7 +131,9 @@ def test_vi_fieldsplit_fracture_inflation(tmp_path, method):
     h2 = list(csv.DictReader(open(out / "history.csv")))
     its = [int(r["snes_its"]) for r in h2[1:]]
     p = "injection_pressure"
-    worst = max(abs(float(a[p]) - float(b[p])) / float(a[p]) for a, b in zip(h1, h2))
-    print(method, "Newton per step max", max(its), "Krylov", s["ksp_iterations"], "vs direct", worst)
-    assert s["status"] == "completed" and len(h1) == len(h2) and max(its) <= 15
-    assert worst <= 1e-7
+    dp = abs(float(h1[-1][p]) - float(h2[-1][p])) / float(h1[-1][p])
+    dw = abs(ref["opening_centre"] - s["opening_centre"]) / ref["opening_centre"]
+    print(method, "steps", len(h1) - 1, len(h2) - 1, "Newton per step max", max(its), "Krylov",
+          s["ksp_iterations"], "final pressure, opening vs direct", dp, dw)
+    assert s["status"] == "completed" and max(its) <= 15
+    assert dp <= 1e-6 and dw <= 1e-4
