@@ -70,10 +70,9 @@ class ContactNullspacePC:
         context, rows, maps = served_rows(pc)
         self._release()
         comm = K.getComm()
+        PETSc.garbage_cleanup(comm)              # see VIFieldSplit.setUp
         if maps is None and not _has_lam(context, rows, comm):
-            self.A = K                                           # u alone: its elasticity
-            K.incRef()
-            self._set_inner(pc, K, context, rows)
+            self._set_inner(pc, K, context, rows)                # u alone: its elasticity
             return
         if context.p1_interpolation() is not None:
             warn_once("with P2 u the contact traction (P1) glues only the fracture's vertices: the "

@@ -248,6 +248,9 @@ class VIFieldSplit:
         context = ref() if ref is not None else None
         if context is None:
             raise RuntimeError("VIFieldSplit is set up by petthm's TimeStepper only")
+        # the objects of the last set-up that Python has let go of: on a parallel
+        # communicator petsc4py keeps them in its garbage until this collective call
+        PETSc.garbage_cleanup(pc.getComm())
         rows = context.rows(P)
         r0 = P.getOwnershipRange()[0]
         splits = self._grouped(field_splits(context, rows, r0), pc)

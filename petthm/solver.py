@@ -187,7 +187,10 @@ class TimeStepper:
         self.updates.hooks.append(BiactiveRelease(lower))
 
     def _post_step(self, ts):
-        """Grow the step, clipped to the largest step and to the final time."""
+        """Grow the step, clipped to the largest step and to the final time;
+        free the PETSc objects Python let go of during the step (petsc4py
+        keeps those of a parallel communicator until this collective call)."""
+        PETSc.garbage_cleanup(ts.comm)
         c = self.control
         t = ts.getTime()
         dt = min(ts.getTimeStep() * c.growth, c.dt_max)
