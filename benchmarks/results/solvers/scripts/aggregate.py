@@ -2,7 +2,9 @@ import csv, json, os, shutil, sys
 import numpy as np
 sys.path.insert(0, "/tmp/mi")
 from compare import compare
-RUNS = "/tmp/mi/runs_ccfb2cd"
+RUNS = os.environ.get("RUNS_DIR", "/tmp/mi/runs_ccfb2cd")
+TAG = os.environ.get("TAG", "")
+RUNS_DEST = os.environ.get("RUNS_DEST", "runs")
 OUT = "/work/main/benchmarks/results/solvers"
 
 def row(case, label, d):
@@ -32,6 +34,18 @@ def row(case, label, d):
              status=s["status"], reason=s.get("reason", ""), final_time=s.get("final_time", ""), command=cmd)
     return r
 
+EXTRA = {"": [("fracture_inflation", "block_L1", "diag_fi_reuse/fi_direct_L1_again"),
+              ("fracture_inflation", "block_L1", "diag_fi_reuse/fi_direct_L1_reuse_off"),
+              ("fracture_inflation", "block_L3", "diag_direct_more/fi_direct_L3"),
+              ("partial_opening_ssls", "block_L3", "diag_direct_more/po_ssls_direct_L3")],
+         "_ccfb2cd": [("terzaghi3d", "block_L3", "diag_direct_L3/terzaghi3d_direct_L3"),
+                      ("penny_impermeable", "block_L3", "diag_more/penny_direct_L3_forced"),
+                      ("partial_opening_rsls", "block_L3", "diag_direct_L3/po_rsls_direct_L3"),
+                      ("partial_opening_ssls", "block_L2", "diag_partial_opening_ssls/direct_L2"),
+                      ("fracture_inflation", "block_L2", "diag_more/fi_direct_L2"),
+                      ("fracture_inflation", "block_L3", "diag_direct_L3/fi_direct_L3")]}
+
+
 def main():
     allrows = []
     for case in sorted(os.listdir(RUNS)):
@@ -40,12 +54,12 @@ def main():
             if not os.path.exists(os.path.join(d, "summary.json")):
                 continue
             allrows.append(row(case, label, d))
-            dst = os.path.join(OUT, "runs", case, label); os.makedirs(dst, exist_ok=True)
+            dst = os.path.join(OUT, RUNS_DEST, case, label); os.makedirs(dst, exist_ok=True)
             for f in ("summary.json", "history.csv", "cmd.txt", "log.txt", "time.txt"):
                 if os.path.exists(os.path.join(d, f)):
                     shutil.copy(os.path.join(d, f), dst)
     os.makedirs(OUT, exist_ok=True)
-    with open(os.path.join(OUT, "mesh_independence.csv"), "w", newline="") as f:
+    with open(os.path.join(OUT, f"mesh_independence{TAG}.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(allrows[0])); w.writeheader(); w.writerows(allrows)
     # agreement
     agr = []
@@ -58,9 +72,14 @@ def main():
                     if not (os.path.exists(a + "/history.csv") and os.path.exists(b + "/history.csv")):
                         continue
                     out, same, na, nb = compare(a, b)
-                    agr.append(dict(case=case, block=l, direct=r, same_times=same, rows=f"{na}/{nb}",
+                    agr.append(dict(case=case, block=l, direct=r, same_times=same, rows=f"{na}/{nb}" + ("" if same else " (final rows compared)"),
                                     **{k: f"{v:.1e}" for k, v in out.items()}))
-    with open(os.path.join(OUT, "direct_agreement.json"), "w") as f:
+    for case, l, r in EXTRA.get(TAG, []):
+        a, b = os.path.join(RUNS, case, l), os.path.join(RUNS, r)
+        out, same, na, nb = compare(a, b)
+        agr.append(dict(case=case, block=l, direct=r, same_times=same, rows=f"{na}/{nb}" + ("" if same else " (final rows compared)"),
+                        **{k: f"{v:.1e}" for k, v in out.items()}))
+    with open(os.path.join(OUT, f"direct_agreement{TAG}.json"), "w") as f:
         json.dump(agr, f, indent=1)
     for a in agr: print(a)
 

@@ -8,6 +8,10 @@ def compare(da, db):
     a, b = load(da), load(db)
     out = {}
     n = min(len(a), len(b))
+    ta0 = [r["time"] for r in a]; tb0 = [r["time"] for r in b]
+    same_path = ta0 == tb0
+    if not same_path:                       # different step paths: compare the final states only
+        a, b, n = a[-1:], b[-1:], 1
     for k in a[0]:
         if k in SKIP or k not in b[0]:
             continue
@@ -22,9 +26,7 @@ def compare(da, db):
         scale = np.max(np.abs(y[m]))
         diff = np.max(np.abs(x[m] - y[m]))
         out[k] = diff / scale if scale > 0 else diff
-    ta = np.array([float(r["time"]) for r in a]); tb = np.array([float(r["time"]) for r in b])
-    same_t = len(a) == len(b) and np.allclose(ta, tb, rtol=1e-12, atol=0)
-    return out, same_t, len(a), len(b)
+    return out, same_path, len(ta0), len(tb0)
 if __name__ == "__main__":
     out, same, na, nb = compare(sys.argv[1], sys.argv[2])
     print("same times:", same, na, nb)

@@ -1,8 +1,10 @@
 import csv, json, os, re
 OUT = "/work/main/benchmarks/results/solvers"
-rows = list(csv.DictReader(open(f"{OUT}/mesh_independence.csv")))
+TAG = os.environ.get("TAG", "")
+NOTES = os.environ.get("NOTES", "/tmp/mi")
+rows = list(csv.DictReader(open(f"{OUT}/mesh_independence{TAG}.csv")))
 R = {(r["case"], r["run"]): r for r in rows}
-agr = json.load(open(f"{OUT}/direct_agreement.json"))
+agr = json.load(open(f"{OUT}/direct_agreement{TAG}.json"))
 f = lambda x, p=1: f"{float(x):.{p}f}"
 
 def lvl_opts(cmd):
@@ -45,7 +47,7 @@ def agree(case):
         out.append(s)
     return "\n".join(out)
 
-md = [open("/tmp/mi/md_head.md").read()]
+md = [open(f"{NOTES}/md_head.md").read()]
 for case, title in [("terzaghi3d", "1. terzaghi 3D (P2 u / P1 pm), `-thm_terzaghi_width 4`"),
                     ("partial_opening_rsls", "2a. partial_opening P1, vinewtonrsls"),
                     ("partial_opening_ssls", "2b. partial_opening P1, vinewtonssls"),
@@ -53,13 +55,13 @@ for case, title in [("terzaghi3d", "1. terzaghi 3D (P2 u / P1 pm), `-thm_terzagh
                     ("penny_impermeable", "4. penny_impermeable (Scene 2) P1")]:
     md.append(f"## {title}\n\n" + table(case, ["direct_L1", "block_L1", "block_L2", "block_L3"]) + "\n\n" + growth(case) +
               "\n\nDirect-solve agreement (level 1):\n\n" + agree(case) + "\n")
-    if os.path.exists(f"/tmp/mi/notes_{case}.md"):
-        md.append(open(f"/tmp/mi/notes_{case}.md").read())
+    if os.path.exists(f"{NOTES}/notes_{case}.md"):
+        md.append(open(f"{NOTES}/notes_{case}.md").read())
 md.append("## 5a. Weak scaling: terzaghi 3D, `-thm_mesh_size 0.7`, width grown with the rank count\n\n"
           + table("weak_terzaghi3d", ["direct_n1", "block_n1", "block_n2", "block_n4", "block_n8"]).replace("| run |", "| run (ranks) |")
           + "\n\n" + growth("weak_terzaghi3d", "block_n1", "block_n8").replace("level 1 to 3", "1 to 8 ranks") + "\n\nDirect-solve agreement (1 rank):\n\n" + agree("weak_terzaghi3d") + "\n")
 md.append("## 5b. Scene 2 level (10, 5, 75) on 1, 2, 4 ranks (same mesh)\n\n"
           + table("weak_penny", ["direct_n1", "block_n1", "block_n2", "block_n4"])
           + "\n\nDirect-solve (1 rank) agreement of every rank count:\n\n" + agree("weak_penny") + "\n")
-md.append(open("/tmp/mi/md_tail.md").read())
-open(f"{OUT}/mesh_independence.md", "w").write("\n".join(md))
+md.append(open(f"{NOTES}/md_tail.md").read())
+open(f"{OUT}/mesh_independence{TAG}.md", "w").write("\n".join(md))
