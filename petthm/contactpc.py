@@ -71,7 +71,7 @@ class ContactNullspacePC:
         self._release()
         comm = K.getComm()
         PETSc.garbage_cleanup(comm)              # see VIFieldSplit.setUp
-        if maps is None and not _has_lam(context, rows, comm):
+        if maps is None and not context.holds("lam", rows):
             self._set_inner(pc, K, context, rows)                # u alone: its elasticity
             return
         if context.p1_interpolation() is not None:
@@ -205,12 +205,6 @@ def warn_once(message: str) -> None:
     if message not in _WARNED:
         _WARNED.add(message)
         PETSc.Sys.Print(f"petthm: warning: {message}")
-
-
-def _has_lam(context, rows: np.ndarray, comm) -> bool:
-    """Whether any rank's rows hold contact tractions."""
-    n = int(np.isin(context.fields["lam"], rows).sum()) if "lam" in context.fields else 0
-    return comm.tompi4py().allreduce(n) > 0
 
 
 def _safe(a: np.ndarray) -> np.ndarray:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from petsc4py import PETSc
 
-from . import compat
+from . import compat, probes
 from .errors import InputError
 
 #: the attribute of a PC through which ``solver.TimeStepper`` gives a Python
@@ -59,6 +59,12 @@ class SolverContext:
             return np.asarray(snes.getVIInactiveSet().getIndices(), dtype=compat.INT)
         r0, r1 = P.getOwnershipRange()
         return np.arange(r0, r1, dtype=compat.INT)
+
+    def holds(self, field: str, rows: np.ndarray) -> bool:
+        """Whether the full-system unknowns ``rows`` (this rank's) hold any
+        unknown of ``field`` on any rank (collective)."""
+        mine = np.isin(self.fields[field], rows) if field in self.fields else np.zeros(0, dtype=bool)
+        return probes.global_count(self.problem.dm.comm, mine) > 0
 
     def contact(self):
         """The contact pairs (``contactpc.ContactStructure``), made once."""
@@ -269,8 +275,7 @@ class VIFieldSplit:
         opts = PETSc.Options(self.inner.getOptionsPrefix())
         extra = context.problem.preconditioner_blocks() if opts.getBool("fixed_stress", True) else None
         glue = maps if opts.getBool("contact_schur", True) else None
-        mech = "u" in context.fields and P.getComm().tompi4py().allreduce(
-            int(np.isin(context.fields["u"], splits[0].rows).any()), op=_mpi_max()) > 0
+        mech = context.holds("u", splits[0].rows)
         for split in splits[1:]:                                # their preconditioning blocks
             Sp = split_block(P, split, rows, context, glue, extra) if mech else None
             if Sp is not None:
@@ -281,11 +286,10 @@ class VIFieldSplit:
 
     def _contact_maps(self, context, P, splits):
         """The contact maps of the first split when it holds u and lam."""
-        if not splits or not {"u", "lam"} <= set(context.fields):
+        if not splits:
             return None
         first = splits[0].rows
-        held = [int(np.isin(context.fields[f], first).sum()) for f in ("u", "lam")]
-        if min(P.getComm().tompi4py().allreduce(n) for n in held) == 0:
+        if not (context.holds("u", first) and context.holds("lam", first)):
             return None
         from .glue import glue_maps
         K = P.createSubMatrix(splits[0].iset, splits[0].iset)
@@ -357,8 +361,7 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
     None when no term applies (the block stays A_ss)."""
     comm = P.getComm()
     r0 = P.getOwnershipRange()[0]
-    has_extra = extra is not None and comm.tompi4py().allreduce(
-        int(np.isin(split.rows, _rows_of(extra)).any()), op=_mpi_max()) > 0
+    has_extra = extra is not None and probes.global_count(comm, np.isin(split.rows, _rows_of(extra))) > 0
 
     def positions(field):
         return PETSc.IS().createGeneral(
@@ -400,8 +403,3 @@ def _rows_of(M: PETSc.Mat) -> np.ndarray:
     """The owned rows of M that hold an entry."""
     ai = M.getValuesCSR()[0]
     return np.flatnonzero(np.diff(ai)) + M.getOwnershipRange()[0]
-
-
-def _mpi_max():
-    from mpi4py import MPI
-    return MPI.MAX

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from petsc4py import PETSc
 
-from . import compat
+from . import compat, probes
 
 #: a lam row with a diagonal D (the semismooth row of ``vinewtonssls``) is
 #: glued when eliminating it would add a normal stiffness b c / D above this
@@ -190,7 +190,7 @@ def _glued_rows(K: PETSc.Mat, iu: PETSc.IS, st: PETSc.Mat, b: PETSc.Vec, c: PETS
     absd = dA.copy()
     absd.abs()
     dK.restoreSubVector(iu, dA)
-    pat = _pattern(st)
+    pat = pattern_of(st)
     total, count = b.duplicate(), b.duplicate()
     pat.mult(absd, total)
     ones = absd.duplicate()
@@ -210,8 +210,7 @@ def _normals_from_opening(B: PETSc.Mat, code: PETSc.Vec) -> np.ndarray:
     copy's component k minus those on the - copy's, for each k (the weak
     opening int mu (u+ - u-) . n: its + entries are int mu phi n_k)."""
     cd = code.getArray(readonly=True)
-    d = int(np.abs(cd).max(initial=0.0))
-    d = B.getComm().tompi4py().allreduce(d, op=_mpi_max())
+    d = int(probes.global_max(B.getComm(), np.abs(cd), 0.0))
     ind = code.duplicate()
     out = B.createVecLeft()
     n = np.zeros((B.getLocalSize()[0], d))
@@ -245,7 +244,7 @@ def glued_basis(maps: GlueMaps, A: PETSc.Mat) -> PETSc.Mat:
     comm = A.getComm()
     r0, r1 = A.getOwnershipRange()
     held = maps.code.duplicate()
-    ones = _pattern(maps.st)
+    ones = pattern_of(maps.st)
     ones.multTranspose(maps.glued, held)                       # > 0 where a glued node holds the row
     free = np.flatnonzero(held.getArray(readonly=True) == 0.0) + r0
     ones.destroy()
@@ -277,7 +276,7 @@ def glued_basis(maps: GlueMaps, A: PETSc.Mat) -> PETSc.Mat:
     return _coo_matrix(r[keep], c[keep] + start, v[keep], (r1 - r0, PETSc.DECIDE), (ncol, PETSc.DECIDE), comm)
 
 
-def _pattern(M: PETSc.Mat) -> PETSc.Mat:
+def pattern_of(M: PETSc.Mat) -> PETSc.Mat:
     """The nonzero pattern of M with ones."""
     ai, aj, _ = M.getValuesCSR()
     out = PETSc.Mat().createAIJ(M.getSizes(), csr=(ai, aj, np.ones(len(aj))), comm=M.getComm())
@@ -335,8 +334,3 @@ def _tangents(n: np.ndarray) -> np.ndarray:
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
     t2 = np.cross(n, t1)
     return np.stack([t1, t2], axis=1)
-
-
-def _mpi_max():
-    from mpi4py import MPI
-    return MPI.MAX

@@ -21,6 +21,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from . import compat
+from .glue import pattern_of
 
 
 def p1_interpolation(problem) -> tuple[PETSc.Mat, np.ndarray] | None:
@@ -85,7 +86,7 @@ def glued_interpolation(interp: tuple[PETSc.Mat, np.ndarray], u_full: np.ndarray
     edge = Z.createVecLeft()
     edge.getArray()[:] = (~on_vertex).astype(float)
     touch = Z.createVecRight()
-    A = _abs(Z)
+    A = pattern_of(Z)
     A.multTranspose(edge, touch)
     c0 = touch.getOwnershipRange()[0]
     cols = PETSc.IS().createGeneral((np.flatnonzero(touch.getArray() == 0.0) + c0).astype(compat.INT),
@@ -109,13 +110,6 @@ def _columns(M: PETSc.Mat, cols: PETSc.IS) -> PETSc.Mat:
     rows = PETSc.IS().createStride(r1 - r0, r0, 1, comm=M.getComm())
     out = M.createSubMatrix(rows, cols)
     rows.destroy()
-    return out
-
-
-def _abs(M: PETSc.Mat) -> PETSc.Mat:
-    ai, aj, av = M.getValuesCSR()
-    out = PETSc.Mat().createAIJ(M.getSizes(), csr=(ai, aj, np.abs(av)), comm=M.getComm())
-    out.assemble()
     return out
 
 

@@ -182,7 +182,8 @@ class Problem:
         xl, xdl = self.local_arrays(X, t, Xdot)
         compat.coo_set_values(P, self.jacobian_values(xl, xdl, t, shift))
         P.assemble()
-        self._jacobian_point = (xl.copy(), xdl.copy(), t, shift)
+        if self.model.preconditioner:           # what preconditioner_blocks assembles at
+            self._jacobian_point = (xl.copy(), xdl.copy(), t, shift)
         if J != P:
             J.assemble()
         self._ev_jac.end()

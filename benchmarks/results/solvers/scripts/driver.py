@@ -1,9 +1,9 @@
 """Sequential runner of the mesh-independence study (one petthm run at a time).
 python driver.py CASE  -> runs the case's runs not yet done, into /tmp/mi/runs/CASE/LABEL."""
 import os, shlex, subprocess, sys, time, json
-ROOT = "/tmp/mi/src_ccfb2cd"
+ROOT = "/tmp/mi/src_09d8db7"
 PY = "/work/main/.venv/bin/python"
-RUNS = "/tmp/mi/runs_ccfb2cd"
+RUNS = "/tmp/mi/runs_09d8db7"
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="1",
            OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
@@ -57,6 +57,12 @@ CASES = {
     "diag_memory": [(f"fi_block_L3_T{T}", "fracture_inflation", FI + " " + CRACK_LEVELS[2] + f" -thm_final_time {T} " + BLOCK, 1) for T in (100, 400, 1000)]
                    + [(f"fi_direct_L3_T{T}", "fracture_inflation", FI + " " + CRACK_LEVELS[2] + f" -thm_final_time {T}", 1) for T in (100, 1000)]
                    + [(f"terzaghi_block_L1_T{T}", "terzaghi", TERZ + " " + TERZ_LEVELS[0] + f" -thm_final_time {T} " + BLOCK, 1) for T in (0.5, 20)],
+    "diag_direct_more": [("po_ssls_direct_L3", "partial_opening", "-thm_fe_degree 1 -snes_type vinewtonssls " + CRACK_LEVELS[2], 1),
+                         ("fi_direct_L3", "fracture_inflation", FI + " " + CRACK_LEVELS[2], 1),
+                         ("terzaghi3d_block_L1_T0.5", "terzaghi", TERZ + " " + TERZ_LEVELS[0] + " -thm_final_time 0.5 " + BLOCK, 1),
+                         ("fi_block_L3_T100", "fracture_inflation", FI + " " + CRACK_LEVELS[2] + " -thm_final_time 100 " + BLOCK, 1)],
+    "diag_fi_reuse": [("fi_direct_L1_reuse_off", "fracture_inflation", FI + " " + CRACK_LEVELS[0] + " -thm_pc_reuse off", 1),
+                      ("fi_direct_L1_again", "fracture_inflation", FI + " " + CRACK_LEVELS[0], 1)],
 }
 
 
