@@ -55,10 +55,11 @@ def reference_flux(f1, Jinv):
 
 
 class _Tab:
-    """Reference tabulation of one element degree on one rule."""
+    """Reference tabulation of one element degree (Lagrange, or its dual
+    basis) on one rule."""
 
-    def __init__(self, dim, degree, points):
-        t = fe.tabulate(dim, degree, points)
+    def __init__(self, dim, degree, points, dual=False):
+        t = (fe.tabulate_dual if dual else fe.tabulate)(dim, degree, points)
         self.phi, self.dphi, self.hess = t.phi, t.dphi, t.hess
         nq, nb = t.phi.shape
         # D[q*d+k, i] = dphi[q, i, k]
@@ -121,7 +122,8 @@ class Assembler:
         dim = self.mesh.rdim
         pmax = max(f.degree for f in disc.fields)
         self.rule = fe.vertex_rule(dim) if region.lumped else fe.rule(dim, quad_degree or 2 * pmax)
-        self._tabs = {p: _Tab(dim, p, self.rule.points) for p in (1, 2)}
+        duals = (False, True) if region.dual else (False,)
+        self._tabs = {(p, dual): _Tab(dim, p, self.rule.points, dual) for p in (1, 2) for dual in duals}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
         self._ref_cache = {}
         self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in self.model.facets}
@@ -145,8 +147,14 @@ class Assembler:
         return self.scales[self.disc.field(name).name]
 
     # -- tabulations ----------------------------------------------------------
+    def basis(self, name) -> tuple[int, bool]:
+        """(degree, dual) of the basis a field (reference) is seen in here:
+        the region's own fields in a dual region are in the dual basis."""
+        f = self.disc.field(name)
+        return f.degree, self.region.dual and isinstance(name, str) and f.region == self.base
+
     def tab(self, name) -> _Tab:
-        return self._tabs[self.disc.field(name).degree]
+        return self._tabs[self.basis(name)]
 
     def basis_laplacian(self, name, cells) -> np.ndarray:
         """Laplacian of every basis function on each cell, (nc, nb)."""
@@ -282,7 +290,7 @@ class Assembler:
         """Products of reference basis functions/gradients per quadrature point
         (``q``) and summed with the rule's weights (``w``, for coefficients
         that are constant over each cell).  Cached per pair of degrees."""
-        key = (degF, degG)
+        key = (degF, degG)                  # each a (degree, dual) basis
         if key not in self._ref_cache:
             tF, tG = self._tabs[degF], self._tabs[degG]
             nq = self.rule.weights.size
@@ -311,7 +319,7 @@ class Assembler:
 
     def _cell_block(self, jb, ctx, cells):
         fF, fG = self.disc.field(jb.test), self.disc.field(jb.trial)
-        ref = self._reference_tensors(fF.degree, fG.degree)
+        ref = self._reference_tensors(self.basis(jb.test), self.basis(jb.trial))
         Jinv, JinvT = ctx.Jinv, np.swapaxes(ctx.Jinv, 1, 2)
         W = self.W[cells]
         absdet = np.abs(self.mesh.detJ[cells])[:, None]

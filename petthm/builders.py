@@ -37,7 +37,7 @@ from .kernels import poroelastic as pe
 from .kernels import flow as fk
 from .kernels import heat as hk
 from .materials import NUSSELT
-from .model import Domain, Model, PointTerm, traces
+from .model import FRACTURE, FRACTURE_DUAL, Domain, Model, PointTerm, traces
 
 #: canonical order of the fields (the order of the unknowns in the section)
 FIELD_ORDER = ("u", "lam", "pf", "pm", "Tf", "Tm")
@@ -116,16 +116,21 @@ class ModelBuilder:
     # -- fracture mechanics ----------------------------------------------------------------
     def contact(self, *, normal_stress: float, u_scale: float, pressure: Optional[Callable] = None) -> \
             ct.FractureMechanics:
-        """lam (P1 on the fracture) >= 0 with the face loads pf + lam +
-        sigma0_nn on u+- (kernels/contact.py); the fluid pressure is the
-        field pf (when the model has fracture flow) or a prescribed
-        ``pressure(x, t)``.  ``normal_stress``: the in-situ compressive
-        stress on the fracture; ``u_scale``: the displacement scale (the
-        VI's gap tolerance)."""
+        """lam >= 0 with the face loads pf + lam + sigma0_nn on u+-
+        (kernels/contact.py); the fluid pressure is the field pf (when the
+        model has fracture flow) or a prescribed ``pressure(x, t)``.
+        ``normal_stress``: the in-situ compressive stress on the fracture;
+        ``u_scale``: the displacement scale (the VI's gap tolerance).  lam
+        has the degree of u, paired in the dual basis
+        (``-thm_contact_pairing dual``), or is P1 with the consistent
+        pairing (``consistent``)."""
+        dual = self.p.contact_pairing == "dual"
         self.mechanics = ct.FractureMechanics(self.dim, pf=None if pressure else "pf", pressure=pressure,
                                               insitu_normal_stress=-normal_stress,
-                                              gap_tolerance=GAP_TOLERANCE * u_scale)
-        self.model.add_field(FieldSpec("lam", 1, 1, Domain.FRACTURE))
+                                              gap_tolerance=GAP_TOLERANCE * u_scale,
+                                              pairing=FRACTURE_DUAL if dual else FRACTURE)
+        degree = self.model.fields[[f.name for f in self.model.fields].index("u")].degree if dual else 1
+        self.model.add_field(FieldSpec("lam", 1, degree, Domain.FRACTURE))
         self.model.add(ct.fracture_mechanics_terms(self.mechanics))
         self.model.bounds["lam"] = (0.0, None)
         return self.mechanics

@@ -74,10 +74,10 @@ class ContactNullspacePC:
         if maps is None and not context.holds("lam", rows):
             self._set_inner(pc, K, context, rows)                # u alone: its elasticity
             return
-        if context.p1_interpolation() is not None:
-            warn_once("with P2 u the contact traction (P1) glues only the fracture's vertices: the "
-                      "contact preconditioner is approximate and may fail on a closed fracture that "
-                      "cuts the domain (docs/solvers.md; P2 contact is issue 13)")
+        if context.lam_below_u():
+            warn_once("with P2 u and a P1 contact traction (-thm_contact_pairing consistent) the glue "
+                      "holds only the fracture's vertices: the contact preconditioner is approximate and "
+                      "may fail on a closed fracture that cuts the domain (docs/solvers.md)")
         self._own_maps = maps is None
         self.maps = glue_maps(K, context.contact(), rows) if maps is None else maps
         self.A = K.createSubMatrix(self.maps.iu, self.maps.iu)

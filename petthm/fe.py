@@ -183,3 +183,53 @@ def facet_points(dim: int, facet: int, points: np.ndarray) -> np.ndarray:
     verts = [v for v in range(dim + 1) if v != facet]
     V = REFERENCE_VERTICES[dim][verts]
     return V[0] + points @ (V[1:] - V[0])
+
+
+# --------------------------------------------------------------------------
+# Dual (biorthogonal) multiplier bases
+# --------------------------------------------------------------------------
+#: weight of the edge functions added to a vertex function of a P2 triangle
+#: in the modified basis of Popp, Wohlmuth, Gee & Wall (2012): the P2
+#: vertex functions of a triangle integrate to zero, which would leave the
+#: vertex multipliers without a pairing; alpha in (0, 1/2), 1/5 is theirs.
+P2_TRIANGLE_ALPHA = 0.2
+
+
+def modified_basis(dim: int, degree: int) -> np.ndarray:
+    """T (nb, nb) with phi~ = T phi: the identity, except for P2 triangles,
+    where phi~_v = phi_v + alpha sum_{edges e at v} phi_e and
+    phi~_e = (1 - 2 alpha) phi_e (a partition of unity whose functions all
+    have a positive integral)."""
+    nb = nodes_per_cell(dim, degree)
+    T = np.eye(nb)
+    if dim == 2 and degree == 2:
+        a = P2_TRIANGLE_ALPHA
+        for k, (v0, v1) in enumerate(EDGES[2]):
+            e = dim + 1 + k
+            T[v0, e] = T[v1, e] = a
+            T[e, e] = 1.0 - 2.0 * a
+    return T
+
+
+@functools.lru_cache(maxsize=None)
+def dual_coefficients(dim: int, degree: int) -> np.ndarray:
+    """C (nb, nb) with the dual basis psi = C phi on the reference simplex:
+    int psi_k phi~_j = delta_kj int phi~_k for the modified basis
+    phi~ = T phi (``modified_basis``); psi = D M~^-1 T phi with M~ the mass
+    matrix of phi~ and D = diag(int phi~).  The psi reproduce constants
+    (sum_k psi_k = 1).  Used for contact multipliers: the weak opening
+    int psi_k g is then D_k g~_k, a nodal quantity (docs/contact.md)."""
+    r = rule(dim, 2 * degree)
+    phi = tabulate(dim, degree, r.points).phi
+    M = phi.T @ (r.weights[:, None] * phi)
+    T = modified_basis(dim, degree)
+    Mt = T @ M @ T.T
+    D = Mt.sum(axis=1)                     # int phi~_k (the phi~ sum to 1)
+    return (D[:, None] * np.linalg.inv(Mt)) @ T
+
+
+def tabulate_dual(dim: int, degree: int, points: np.ndarray) -> Tabulation:
+    """The dual basis psi = C phi (``dual_coefficients``) at ``points``."""
+    t = tabulate(dim, degree, points)
+    C = dual_coefficients(dim, degree)
+    return Tabulation(t.phi @ C.T, np.einsum("qjd,kj->qkd", t.dphi, C), np.einsum("kj,jab->kab", C, t.hess))

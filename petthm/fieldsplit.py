@@ -81,6 +81,13 @@ class SolverContext:
             self._rigid = _rigid_mode_vectors(self.problem)
         return self._rigid
 
+    def lam_below_u(self) -> bool:
+        """A contact traction of lower degree than u (the consistent
+        pairing with P2 u): the glue then holds the vertices only."""
+        disc = self.problem.disc
+        names = [f.name for f in disc.fields]
+        return "lam" in names and disc.field("lam").degree < disc.field("u").degree
+
     def p1_interpolation(self):
         """The P1 -> P2 interpolation of u (``pmg.p1_interpolation``), made
         once; None when u is not P2."""

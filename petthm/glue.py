@@ -44,21 +44,23 @@ class ContactStructure:
 
 
 def contact_structure(problem) -> ContactStructure:
-    """List every (lam, u+, u-) of the fracture vertices that are split (not
-    the tip).  A pair seen by several ranks (ghost cohesive cells) is
-    entered by each of them and divided by the number of ranks that did."""
-    from .model import Domain
+    """List every (lam, u+, u-) of the fracture's lam nodes whose u is split
+    (not the tip): the vertices, and the edge midpoints of a P2 lam.  A
+    pair seen by several ranks (ghost cohesive cells) is entered by each of
+    them and divided by the number of ranks that did."""
+    from .model import Domain, Side, Trace
     disc = problem.disc
-    surf = disc.regions[Domain.FRACTURE]
     g = disc.global_index
     d = disc.mesh.dim
-    verts = np.unique(np.column_stack([surf.cell_vertices.ravel(), surf.plus_vertices.ravel()]), axis=0)
-    verts = verts[verts[:, 0] != verts[:, 1]]
-    pts = verts + surf.vstart - disc.pstart
-    lam = g[disc.offsets["lam"][pts[:, 0]]]
+    lam_dofs = disc.region_dofs(Domain.FRACTURE, "lam")                              # (nc, nb)
+    nb = lam_dofs.shape[1]
+    up, um = (disc.region_dofs(Domain.FRACTURE, Trace("u", side))[:, :nb * d].reshape(-1, d)
+              for side in (Side.PLUS, Side.MINUS))
+    local, first = np.unique(lam_dofs.ravel(), return_index=True)
+    split = up[first, 0] != um[first, 0]
+    lam = g[local[split]]
+    u = np.concatenate([g[up[first[split]]], g[um[first[split]]]], axis=1)          # (n, 2d)
     comps = np.arange(d)
-    u = np.concatenate([g[disc.offsets["u"][pts[:, 1]][:, None] + comps],
-                        g[disc.offsets["u"][pts[:, 0]][:, None] + comps]], axis=1)         # (n, 2d)
     code = np.concatenate([comps + 1, -(comps + 1)]).astype(float)
     rows = np.repeat(lam, 2 * d)
     ok = (rows >= 0) & (u.ravel() >= 0)

@@ -159,6 +159,10 @@ DECLARED = {
                                "contact traction (deformable)", **_POS),
     "fracture_normal_stiffness": param(1e11, "Pa/m", "normal joint stiffness Kn", **_POS),
     "fracture_residual_fraction": param(1e-3, "-", "residual aperture ares / a0", lo=0.0, hi=1.0),
+    "contact_pairing": param("dual", "-", "how the contact traction meets the opening: dual (lam on the "
+                             "nodes of the u trace, dual basis: nodal contact for P1 and P2 u) or consistent "
+                             "(P1 lam, L2 pairing: the scheme before issue 13)",
+                             choices=("dual", "consistent")),
     "fracture_heat_exchange": param("equilibrium", "-", "wall heat exchange: equilibrium, nusselt, or "
                                     "hw in W/(m2 K)", parse=parse_exchange),
     # state and wells (sections 2, 9)
@@ -184,6 +188,7 @@ ROCK_HEAT = ("rock_density", "rock_heat_capacity", "rock_conductivity")
 FLUID_HEAT = ("fluid_density", "fluid_heat_capacity", "fluid_conductivity")
 FLUID_FLOW = ("fluid_viscosity", "fluid_compressibility", "fluid_thermal_expansion")
 JOINT = ("fracture_aperture", "fracture_normal_stiffness", "fracture_residual_fraction")
+CONTACT = ("contact_pairing",)
 WELLS = ("injection_rate", "injection_temperature", "production_pressure", "well_radius")
 
 

@@ -28,20 +28,24 @@ Kernel = Callable[..., "object"]
 @dataclass(frozen=True)
 class Region:
     """A domain with a quadrature rule: ``lumped`` integrates with the vertex
-    rule (row-sum lumping of P1 mass-type terms)."""
+    rule (row-sum lumping of P1 mass-type terms); ``dual``: Gauss, with the
+    domain's own fields (the contact traction) in their dual basis
+    (``fe.tabulate_dual``; the multiplier pairing of docs/contact.md)."""
     domain: Domain = Domain.MATRIX
     lumped: bool = False
+    dual: bool = False
 
     def __lt__(self, other: "Region") -> bool:     # matrix after fracture, lumped after Gauss
-        return (self.domain.value, self.lumped) < (other.domain.value, other.lumped)
+        return (self.domain.value, self.lumped, self.dual) < (other.domain.value, other.lumped, other.dual)
 
     def __str__(self) -> str:
-        return self.domain.value + ("@lumped" if self.lumped else "")
+        return self.domain.value + ("@lumped" if self.lumped else "") + ("@dual" if self.dual else "")
 
 
 MATRIX = Region(Domain.MATRIX)
 FRACTURE = Region(Domain.FRACTURE)
 FRACTURE_LUMPED = Region(Domain.FRACTURE, lumped=True)
+FRACTURE_DUAL = Region(Domain.FRACTURE, dual=True)
 MATRIX_LUMPED = Region(Domain.MATRIX, lumped=True)
 
 

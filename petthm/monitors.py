@@ -199,3 +199,31 @@ def fracture_vertices(problem, X=None, t: float = 0.0):
     verts, first = np.unique(surf.cell_vertices.ravel(), return_index=True)
     x = surf.mesh.vertex_coords[verts]
     return x, g.ravel()[first], lam.ravel()[first]
+
+
+def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0):
+    """(largest |g| over closed lam nodes on this rank, and per fracture cell
+    the largest |lam_mid - (lam_a + lam_b)/2| over its edges with both ends
+    closed (nc,)), SI: the nodal contact of docs/contact.md leaves no opening
+    where closed and no node-to-node oscillation of lam (the second
+    difference of a smooth lam is O(h^2); near a well or a prescribed front
+    it is O(h) or larger).  A node is closed where lam > ``closed_traction``;
+    the second differences are None for P1 lam (no edge nodes)."""
+    from .fe import EDGES
+    from .model import Side, Trace
+    disc = problem.disc
+    surf = disc.regions[Domain.FRACTURE]
+    xl, _ = problem.local_arrays(X or problem.X, t)
+    nc, d, r = surf.ncells, surf.dim, surf.rdim
+    lam = xl[disc.region_dofs(Domain.FRACTURE, "lam")] * problem.scales["lam"].scale       # (nc, nb)
+    nb = lam.shape[1]
+    jump = [xl[disc.region_dofs(Domain.FRACTURE, Trace("u", s))[:, :nb * d]].reshape(nc, nb, d) for s in
+            (Side.PLUS, Side.MINUS)]
+    g = np.einsum("cka,ca->ck", jump[0] - jump[1], surf.normals) * problem.scales["u"].scale
+    closed = lam > closed_traction
+    opening = float(np.max(np.abs(g[closed]), initial=0.0))
+    if nb == r + 1:
+        return opening, None
+    a, b = EDGES[r][:, 0], EDGES[r][:, 1]
+    second = np.abs(lam[:, r + 1:] - 0.5 * (lam[:, a] + lam[:, b])) * (closed[:, a] & closed[:, b])
+    return opening, second.max(axis=1)

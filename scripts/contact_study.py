@@ -13,6 +13,12 @@
   Krylov iterations per step,
   failed solves, the end of the open zone and the opening at the centre,
   and the largest difference of the opening profile from the finest mesh.
+* ``pairing``: the contact pairings of docs/contact.md (dual, the default,
+  and consistent, P1 lam) on Scene 2's coarse unstructured meshes (fracture
+  40 m and 20 m, to 1e7 s) with P1 and P2 u: the aperture identity, the
+  largest opening of a closed node, the second difference of lam away from
+  the wells and the front, lam and the aperture at the injector, wall time.
+  (The sneddon study runs both pairings too.)
 * ``mandel``: error against run time for Mandel's problem, u of degree 1
   and 2 (pm P1), three structured meshes: the largest nodal pressure error
   over c t/a^2 = 0.01 ... 1 and the error of the Mandel-Cryer peak, both
@@ -33,6 +39,8 @@ from study_tables import ROOT, read_history, run_petthm, write_csv
 SNEDDON = {2: ["-thm_sneddon_dim", "2", "-thm_sneddon_radius", "50"], 3: []}
 SNEDDON_SIZES = {2: [0.1, 0.05, 0.025, 0.0125], 3: [0.2, 0.1, 0.05]}
 VI_SIZES = [0.05, 0.025, 0.0125]
+PAIRINGS = ["dual", "consistent"]
+PAIRING_MESHES = {40: 20, 20: 10}          # Scene 2 fracture size: well size (m)
 MANDEL_SIZES = [1.0, 0.5, 0.25]
 VI_METHODS = ["vinewtonrsls", "vinewtonssls"]
 VI_SOLVERS = {"direct": [], "fieldsplit": ["-options_file", os.path.join(ROOT, "options", "solvers",
@@ -41,21 +49,48 @@ VI_SOLVERS = {"direct": [], "fieldsplit": ["-options_file", os.path.join(ROOT, "
 
 def sneddon_study(out):
     rows = []
-    for dim in (2, 3):
-        for degree in (1, 2):
-            for h in SNEDDON_SIZES[dim]:
-                d = os.path.join(out, "runs", f"sneddon{dim}d_P{degree}_h{h}")
-                s = run_petthm("sneddon", d, *SNEDDON[dim], "-thm_fe_degree", degree,
-                               "-thm_sneddon_crack_size", h)
-                e = s["error"]
-                rows.append({"dim": dim, "degree": degree, "crack_size_over_R": h, "cells": s["cells"],
-                             "dofs": sum(s["dofs"].values()), "wall_s": round(s["wall_time"]["total"], 2),
-                             "centre_error": e["centre_error"], "l2_error": e["opening_l2_error"]})
-                print(
-                    f"sneddon {dim}D P{degree} h={h}: {rows[-1]['wall_s']} s, "
-                    f"centre {e['centre_error']:.2e}, "
-                    f"L2 {e['opening_l2_error']:.2e}", flush=True)
+    for pairing in PAIRINGS:
+        for dim in (2, 3):
+            for degree in (1, 2):
+                for h in SNEDDON_SIZES[dim]:
+                    d = os.path.join(out, "runs", f"sneddon{dim}d_P{degree}_h{h}_{pairing}")
+                    s = run_petthm("sneddon", d, *SNEDDON[dim], "-thm_fe_degree", degree,
+                                   "-thm_sneddon_crack_size", h, "-thm_contact_pairing", pairing)
+                    e = s["error"]
+                    rows.append({"pairing": pairing, "dim": dim, "degree": degree, "crack_size_over_R": h,
+                                 "cells": s["cells"], "dofs": sum(s["dofs"].values()),
+                                 "wall_s": round(s["wall_time"]["total"], 2),
+                                 "centre_error": e["centre_error"], "l2_error": e["opening_l2_error"]})
+                    print(
+                        f"sneddon {pairing} {dim}D P{degree} h={h}: {rows[-1]['wall_s']} s, "
+                        f"centre {e['centre_error']:.2e}, "
+                        f"L2 {e['opening_l2_error']:.2e}", flush=True)
     write_csv(os.path.join(out, "sneddon.csv"), rows)
+    return rows
+
+
+def pairing_study(out):
+    rows = []
+    for pairing in PAIRINGS:
+        for degree in (1, 2):
+            for size, well in PAIRING_MESHES.items():
+                d = os.path.join(out, "runs", f"scene2_{pairing}_P{degree}_h{size}")
+                s = run_petthm("penny_impermeable", d, "-options_file",
+                               os.path.join(ROOT, "options", "scenes", "penny_impermeable.opts"),
+                               "-thm_scene2_fracture_size", size, "-thm_scene2_well_size", well,
+                               "-thm_scene2_layer", 0, "-thm_fe_degree", degree, "-thm_final_time", 1e7,
+                               "-thm_contact_pairing", pairing)
+                h = read_history(d)
+                rough = h["lam_roughness"].astype(float)
+                rows.append({"pairing": pairing, "degree": degree, "fracture_size_m": size,
+                             "dofs": sum(s["dofs"].values()), "wall_s": round(s["wall_time"]["total"], 2),
+                             "aperture_identity": float(h["aperture_identity"].astype(float).max()),
+                             "closed_opening": float(h["closed_opening"].astype(float).max()),
+                             "lam_roughness": float(np.nanmax(rough)) if np.isfinite(rough).any() else "",
+                             "lam_injector_MPa": float(h["lam_injector"].astype(float)[-1]) / 1e6,
+                             "aperture_injector_mm": 1e3 * float(h["aperture_injector"].astype(float)[-1])})
+                print("scene2", rows[-1], flush=True)
+    write_csv(os.path.join(out, "pairing_scene2.csv"), rows)
     return rows
 
 
@@ -143,9 +178,11 @@ def plot_sneddon(out, rows):
                               ("opening at the centre", "opening, L2 over r < 0.95 R")):
         for dim in ("2", "3"):
             for deg, mk in (("1", "s--"), ("2", "o-")):
-                sel = [r for r in rows if str(r["dim"]) == dim and str(r["degree"]) == deg]
-                ax.loglog([float(r["wall_s"]) for r in sel], [float(r[key]) for r in sel], mk,
-                          label=f"{dim}D P{deg}")
+                for pairing in PAIRINGS:
+                    sel = [r for r in rows if str(r["dim"]) == dim and str(r["degree"]) == deg
+                           and r.get("pairing", "dual") == pairing]
+                    ax.loglog([float(r["wall_s"]) for r in sel], [float(r[key]) for r in sel], mk,
+                              label=f"{dim}D P{deg} {pairing}", alpha=1.0 if pairing == "dual" else 0.4)
         ax.axhline(2e-2 if key == "centre_error" else 3e-2, color="grey", lw=0.8, ls=":")
         ax.set_xlabel("wall time (s)")
         ax.set_ylabel("relative error")
@@ -155,8 +192,21 @@ def plot_sneddon(out, rows):
     fig.savefig(os.path.join(out, "sneddon_work_precision.png"), dpi=120)
 
 
-def markdown(out, sneddon_rows, vi_rows, mandel_rows=()):
+def markdown(out, sneddon_rows, vi_rows, mandel_rows=(), pairing_rows=()):
     lines = []
+    if pairing_rows:
+        lines += ["| Scene 2 to 1e7 s | P | fracture mesh (m) | dofs | wall (s) | aperture identity "
+                  "| closed opening / a_ref | lam 2nd difference / lam0 | lam inj. (MPa) | a inj. (mm) |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in pairing_rows:
+            rough = r["lam_roughness"]
+            rough = f"{float(rough):.2e}" if rough not in ("", "nan") else "(P1 lam)"
+            lines.append(
+                f"| {r['pairing']} | {r['degree']} | {r['fracture_size_m']} | {r['dofs']} | "
+                f"{float(r['wall_s']):.1f} | {float(r['aperture_identity']):.2e} | "
+                f"{float(r['closed_opening']):.2e} | {rough} | {float(r['lam_injector_MPa']):.3f} | "
+                f"{float(r['aperture_injector_mm']):.4f} |")
+        lines.append("")
     if mandel_rows:
         lines += [
             "| mandel | mesh (m) | cells | dofs | steps | wall (s) | max p error / p0 "
@@ -169,12 +219,13 @@ def markdown(out, sneddon_rows, vi_rows, mandel_rows=()):
                 f"{float(r['cryer_peak_rel']):.2e} |")
         lines.append("")
     if sneddon_rows:
-        lines += ["| crack | P | h/R | cells | dofs | wall (s) | w(0) error | L2 error |",
-                  "|---|---|---|---|---|---|---|---|"]
+        lines += ["| pairing | crack | P | h/R | cells | dofs | wall (s) | w(0) error | L2 error |",
+                  "|---|---|---|---|---|---|---|---|---|"]
         for r in sneddon_rows:
             name = "Griffith 2D" if str(r["dim"]) == "2" else "penny 3D"
             lines.append(
-                f"| {name} | {r['degree']} | {r['crack_size_over_R']} | {r['cells']} | {r['dofs']} | "
+                f"| {r.get('pairing', 'dual')} | {name} | {r['degree']} | {r['crack_size_over_R']} | "
+                f"{r['cells']} | {r['dofs']} | "
                 f"{float(r['wall_s']):.2f} | {float(r['centre_error']):.2e} | {float(r['l2_error']):.2e} |")
         lines.append("")
     if vi_rows:
@@ -195,7 +246,7 @@ def markdown(out, sneddon_rows, vi_rows, mandel_rows=()):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "contact"))
-    ap.add_argument("--study", default="sneddon,vi,mandel")
+    ap.add_argument("--study", default="sneddon,vi,mandel,pairing")
     ap.add_argument("--plot-only", action="store_true")
     a = ap.parse_args(argv)
     studies = a.study.split(",")
@@ -209,15 +260,19 @@ def main(argv=None):
             vi_study(a.out)
         if "mandel" in studies:
             mandel_study(a.out)
+        if "pairing" in studies:
+            pairing_study(a.out)
     sn_rows = read_csv(sn) if os.path.exists(sn) else []
     vi_rows = read_csv(vi) if os.path.exists(vi) else []
     mn = os.path.join(a.out, "mandel.csv")
     mn_rows = read_csv(mn) if os.path.exists(mn) else []
+    pr = os.path.join(a.out, "pairing_scene2.csv")
+    pr_rows = read_csv(pr) if os.path.exists(pr) else []
     if sn_rows:
         plot_sneddon(a.out, sn_rows)
     if mn_rows:
         plot_mandel(a.out, mn_rows)
-    markdown(a.out, sn_rows, vi_rows, mn_rows)
+    markdown(a.out, sn_rows, vi_rows, mn_rows, pr_rows)
 
 
 if __name__ == "__main__":

@@ -18,8 +18,12 @@ to the + face.
   with shear on the fracture plane cannot be carried by a frictionless
   fracture and is refused by the scenes.
 
-* Contact (section 3): lam >= 0, g >= 0, lam g = 0.  The residual of the
-  ``lam`` row is the weak opening int mu g (mu the lam test function); SNES's
+* Contact (section 3): lam >= 0, g >= 0, lam g = 0.  lam has the nodes of
+  the trace of u (P1 or P2) and is paired with u in the dual basis psi
+  (``fe.tabulate_dual``, the ``FRACTURE_DUAL`` region): the load of lam is
+  - int lam_h [[v]] . n with lam_h = sum_k lam_k psi_k, and the residual of
+  the ``lam`` row k is the weak opening int psi_k g = D_k g~_k, a nodal
+  quantity (g~ = g at every vertex; docs/contact.md).  SNES's
   variational-inequality Newton (``-snes_type vinewtonrsls``) with the bound
   lam >= 0 solves the complementarity: a node either has lam > 0 and
   int mu g = 0 (closed), or lam = 0 and int mu g >= 0 (open).  There is no
@@ -38,7 +42,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ..model import FRACTURE, CellJacobian, CellResidual, Region, Side, Trace
+from ..model import FRACTURE, FRACTURE_DUAL, CellJacobian, CellResidual, Region, Side, Trace
 
 
 @dataclass(frozen=True)
@@ -52,6 +56,7 @@ class FractureMechanics:
     insitu_normal_stress: float = 0.0          # sigma0_nn, tension positive
     gap_tolerance: float = 0.0                 # m, see ``_gap_f0``
     region: Region = FRACTURE
+    pairing: Region = FRACTURE_DUAL            # where lam meets u (FRACTURE: the consistent pairing)
 
     def trace(self, side: Side) -> Trace:
         """The displacement on one face."""
@@ -83,21 +88,26 @@ def opening(fm: FractureMechanics, ctx):
     return np.einsum("cqa,cqa->cq", jump, np.broadcast_to(ctx.normals, jump.shape))
 
 
-def net_pressure(fm: FractureMechanics, ctx):
-    """P = pf + lam + sigma0_nn (nc, nq)."""
+def fluid_load(fm: FractureMechanics, ctx):
+    """pf + sigma0_nn (nc, nq): the net face pressure without the contact traction."""
     P = np.full(ctx.shape, fm.insitu_normal_stress)
     if fm.pf is not None:
         P = P + ctx.value(fm.pf)[..., 0]
     elif fm.pressure is not None:
         P = P + np.broadcast_to(fm.pressure(ctx.x, ctx.t), ctx.shape)
-    if fm.lam is not None:
-        P = P + ctx.value(fm.lam)[..., 0]
     return P
 
 
 def _face_load(fm: FractureMechanics, sign: float, ctx):
-    """-sign P n: the load on the + (sign = 1) or - (sign = -1) face's rock."""
-    return -sign * net_pressure(fm, ctx)[..., None] * ctx.normals
+    """-sign (pf + sigma0_nn) n: the fluid's load on the + (sign = 1) or
+    - (sign = -1) face's rock (the consistent pairing)."""
+    return -sign * fluid_load(fm, ctx)[..., None] * ctx.normals
+
+
+def _contact_load(fm: FractureMechanics, sign: float, ctx):
+    """-sign lam_h n: the contact traction's load on one face (lam_h in the
+    basis of ``fm.pairing``: the dual basis by default)."""
+    return -sign * ctx.value(fm.lam)[..., 0][..., None] * ctx.normals
 
 
 def _load_g0(sign: float, ctx):
@@ -125,18 +135,22 @@ SIDES = (Side.PLUS, Side.MINUS)
 
 
 def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
-    """Face loads on u+ and u-, and the contact rows of ``lam``."""
+    """Face loads on u+ and u- (the fluid's on ``fm.region``, the contact
+    traction's on ``fm.pairing``), and the contact rows of ``lam``."""
     res, jac = [], []
     for side in SIDES:
         u = fm.trace(side)
         res.append(CellResidual(u, partial(_face_load, fm, side.sign), None, region=fm.region))
-        for q in (fm.pf, fm.lam):
-            if q is not None:
-                jac.append(CellJacobian(u, q, g0=partial(_load_g0, side.sign), region=fm.region))
+        if fm.pf is not None:
+            jac.append(CellJacobian(u, fm.pf, g0=partial(_load_g0, side.sign), region=fm.region))
+        if fm.lam is not None:
+            res.append(CellResidual(u, partial(_contact_load, fm, side.sign), None, region=fm.pairing))
+            jac.append(CellJacobian(u, fm.lam, g0=partial(_load_g0, side.sign), region=fm.pairing))
     if fm.lam is not None:
-        res.append(CellResidual(fm.lam, partial(_gap_f0, fm), None, region=fm.region))
+        res.append(CellResidual(fm.lam, partial(_gap_f0, fm), None, region=fm.pairing))
         for side in SIDES:
-            jac.append(CellJacobian(fm.lam, fm.trace(side), g0=partial(_gap_g0, side.sign), region=fm.region))
+            jac.append(CellJacobian(fm.lam, fm.trace(side), g0=partial(_gap_g0, side.sign),
+                                    region=fm.pairing))
     return res, jac
 
 

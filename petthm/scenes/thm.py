@@ -28,8 +28,9 @@ from ..assembly import FieldScale
 from ..builders import ModelBuilder
 from ..constraints import Dirichlet
 from ..errors import InputError
+from ..fields import Domain
 from ..fracture import TIP_BC
-from ..monitors import FractureWells, fracture_vertices
+from ..monitors import FractureWells, contact_node_checks, fracture_vertices
 from ..params import CELSIUS, param
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, zero
 from .contact import OPEN_TRACTION, contact_solver_defaults, fracture_normal
@@ -68,7 +69,7 @@ class _Scene2Monitor(Monitor):
 
     def __init__(self, scene, base: WellsMonitor, law):
         self.scene, self.base, self.law = scene, base, law
-        self.state, self.last = None, {}
+        self.state, self.last, self._regular = None, {}, None
 
     def __call__(self, problem, t, X=None):
         sc = self.scene
@@ -85,11 +86,30 @@ class _Scene2Monitor(Monitor):
         out["aperture_max"] = probes.global_max(comm, a, empty=0.0)
         out["lam_min"] = probes.global_min(comm, lam)
         out["nodes_open"] = probes.global_count(comm, ~closed)
+        opening, second = contact_node_checks(problem, OPEN_TRACTION * sc.lam0, X, t)
+        out["closed_opening"] = probes.global_max(comm, [opening]) / sc.reference_aperture()
+        out["lam_roughness"] = np.nan if second is None else \
+            probes.global_max(comm, second[self.regular_cells(problem)], empty=0.0) / sc.lam0
         self.base.worst.update("aperture_identity", out["aperture_identity"])
         v = problem.field_values("Tf", X, t)[:, 0] - CELSIUS
         self.state = (x, g, lam, a, v)
         self.last = out
         return out
+
+    def regular_cells(self, problem) -> np.ndarray:
+        """The fracture cells away from the singular points of lam: no vertex
+        on the front (lam prescribed there) or within two well sizes of a
+        well (the log singularity of the pressure)."""
+        if self._regular is None:
+            surf = problem.disc.regions[Domain.FRACTURE]
+            x = surf.mesh.vertex_coords[surf.cell_vertices]                 # (nc, nv, d)
+            p = self.scene.p
+            far = np.ones(len(x), dtype=bool)
+            for w in self.scene.wells_at():
+                far &= np.linalg.norm(x - np.asarray(w), axis=2).min(axis=1) > 2 * p.scene2_well_size
+            inside = np.linalg.norm(x[..., :2], axis=2).max(axis=1) < p.scene2_radius * (1 - 1e-9)
+            self._regular = far & inside
+        return self._regular
 
     def write_fracture_maps(self, problem, path):
         """The last monitored state on the fracture (model half y >= 0), for the
@@ -121,7 +141,8 @@ class PennyImpermeable(Scene):
                    "rock (3D)")
     parameters = (mt.group("Rock", mt.ELASTIC + mt.ROCK_HEAT + ("rock_porosity", "rock_thermal_expansion")),
                   mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_viscosity="water"),
-                  mt.group("Fracture", mt.JOINT + ("fracture_heat_exchange",), fracture_aperture=0.6e-3),
+                  mt.group("Fracture", mt.JOINT + mt.CONTACT + ("fracture_heat_exchange",),
+                           fracture_aperture=0.6e-3),
                   mt.group("Wells, in-situ and initial state", mt.WELLS + (
                       "insitu_stress", "initial_pressure", "initial_temperature"),
                       injection_rate=1e-3, initial_pressure=20e6, production_pressure=20e6),
@@ -131,6 +152,7 @@ class PennyImpermeable(Scene):
                         output_interval=10)
     history_columns = ("injection_pressure", "production_temperature", "production_rate", "lam_injector",
                        "aperture_injector", "aperture_max", "lam_min", "nodes_open", "aperture_identity",
+                       "closed_opening", "lam_roughness",
                        "Tf_min", "Tf_max", "mass_balance", "energy_balance")
     def solver_defaults(self, comm):
         # one LU per time step: the later Newton iterations of a step reuse it

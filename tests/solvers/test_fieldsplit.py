@@ -96,15 +96,16 @@ def test_vi_fieldsplit_scene2(tmp_path, method, scene2_direct):
     assert worst <= 1e-7
 
 
-@pytest.mark.parametrize("method", ["vinewtonrsls", "vinewtonssls"])
-def test_vi_fieldsplit_contact_patch(tmp_path, method):
+@pytest.mark.parametrize("method,degree", [("vinewtonrsls", 1), ("vinewtonssls", 1), ("vinewtonrsls", 2)])
+def test_vi_fieldsplit_contact_patch(tmp_path, method, degree):
     """contact_patch (3D, the fracture cuts the domain, so A_uu is singular:
     the block above is held only by the contact; the glued elasticity of the
-    contact PC is not) with the block recipe, P1 u (with P2 u the P1
-    contact traction does not glue the edge nodes, docs/solvers.md):
+    contact PC is not) with the block recipe, P1 and P2 u (the dual pairing
+    glues every node of the trace; with the consistent P1 traction and P2 u
+    the edge nodes are not glued and this case failed):
     <= 15 Newton iterations per step and lam = sigma - p, |g| <= 1e-9 m."""
     _, s = run_petthm("contact_patch", tmp_path, "-options_file",
-                      f"{ROOT}/options/solvers/block.opts", "-thm_fe_degree", 1,
+                      f"{ROOT}/options/solvers/block.opts", "-thm_fe_degree", degree,
                       "-snes_type", method)
     its = [int(r["snes_its"]) for r in csv.DictReader(open(tmp_path / "history.csv"))][1:]
     print(method, "Newton", its, "Krylov", s["ksp_iterations"], s["error"])

@@ -58,3 +58,41 @@ def test_facet_points_lie_on_the_facet_opposite_the_vertex():
         x = fe.facet_points(3, f, pts)
         lam = np.column_stack([1 - x.sum(axis=1), x])
         assert np.allclose(lam[:, f], 0.0)
+
+
+@pytest.mark.parametrize("dim", [1, 2])
+@pytest.mark.parametrize("degree", [1, 2])
+def test_dual_basis_is_biorthogonal_to_the_modified_basis(dim, degree):
+    """int psi_k phi~_j = delta_kj int phi~_j with every int phi~_j > 0
+    (the P2 triangle's vertex functions need the modified basis), and the
+    dual basis reproduces constants."""
+    r = fe.rule(dim, 2 * degree + 2)
+    phi = fe.tabulate(dim, degree, r.points).phi
+    psi = fe.tabulate_dual(dim, degree, r.points).phi
+    mod = phi @ fe.modified_basis(dim, degree).T
+    E = psi.T @ (r.weights[:, None] * mod)
+    D = mod.T @ r.weights
+    assert np.all(D > 0.05 * fe.REFERENCE_VOLUME[dim] / len(D))
+    assert np.allclose(E, np.diag(D), atol=1e-14)
+    assert np.allclose(psi.sum(axis=1), 1.0)
+    assert np.allclose(mod.sum(axis=1), 1.0)
+
+
+def test_p2_triangle_pairing_is_nodal_at_the_vertices():
+    """int psi_k phi_j of the P2 triangle (area A = 1/2): A/3 [[2a I, 0],
+    [-a adj, I]], a = P2_TRIANGLE_ALPHA: a vertex row of the weak opening
+    sees its own node only, an edge row its node and the edge's two ends;
+    the columns give the consistent load of a uniform traction (0 at the
+    vertices, A/3 at the edges)."""
+    r = fe.rule(2, 6)
+    phi = fe.tabulate(2, 2, r.points).phi
+    psi = fe.tabulate_dual(2, 2, r.points).phi
+    E = psi.T @ (r.weights[:, None] * phi) / (0.5 / 3)
+    a = fe.P2_TRIANGLE_ALPHA
+    expect = np.zeros((6, 6))
+    expect[:3, :3] = 2 * a * np.eye(3)
+    expect[3:, 3:] = np.eye(3)
+    for k, (v0, v1) in enumerate(fe.EDGES[2]):
+        expect[3 + k, [v0, v1]] = -a
+    assert np.allclose(E, expect, atol=1e-13)
+    assert np.allclose(E.sum(axis=0), [0, 0, 0, 1, 1, 1], atol=1e-13)

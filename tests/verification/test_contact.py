@@ -27,8 +27,8 @@ def test_contact_jacobian_matches_finite_differences(tmp_path, scene, opts, degr
 def test_contact_jacobian_check_detects_a_missing_block(tmp_path):
     """Negative control: without the lam-u+ block the check fails."""
     problem = build_problem(tmp_path, "partial_opening", thm_partial_crack_size=0.1)
-    from petthm.model import FRACTURE, Side, Trace
-    asm = problem.region(FRACTURE)
+    from petthm.model import FRACTURE_DUAL, Side, Trace
+    asm = problem.region(FRACTURE_DUAL)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians
                               if not (j.test == "lam" and j.trial == Trace("u", Side.PLUS))]
     asm._build_pattern()
