@@ -121,7 +121,12 @@ class Assembler:
         self.inv_rscale = inv_rscale if inv_rscale is not None else self.default_inv_rscale(disc, scales)
         dim = self.mesh.rdim
         pmax = max(f.degree for f in disc.fields)
-        self.rule = fe.vertex_rule(dim) if region.lumped else fe.rule(dim, quad_degree or 2 * pmax)
+        if region.lumped:
+            self.rule = fe.vertex_rule(dim)
+        elif region.nodal:
+            self.rule = fe.nodal_rule(dim, pmax)
+        else:
+            self.rule = fe.rule(dim, quad_degree or 2 * pmax)
         duals = (False, True) if region.dual else (False,)
         self._tabs = {(p, dual): _Tab(dim, p, self.rule.points, dual) for p in (1, 2) for dual in duals}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
@@ -224,11 +229,13 @@ class Assembler:
         for s in range(0, n, CHUNK):
             yield slice(s, min(n, s + CHUNK))
 
-    def residual(self, xl: np.ndarray, xdl: np.ndarray, t: float) -> np.ndarray:
-        """Local residual vector (scaled) from local solution and its time derivative."""
+    def residual(self, xl: np.ndarray, xdl: np.ndarray, t: float, shift: float = 0.0) -> np.ndarray:
+        """Local residual vector (scaled) from local solution and its time
+        derivative; ``shift``: 1/dt of the step (a kernel that needs the
+        increment x - x_old = x_dot / shift, the friction law)."""
         out = np.zeros(self.disc.nlocal)
         for cells in self._chunks():
-            ctx = CellContext(self, cells, xl, xdl, t)
+            ctx = CellContext(self, cells, xl, xdl, t, shift)
             W = self.W[cells]
             nc = W.shape[0]
             for term in self.model.residuals:

@@ -35,12 +35,13 @@ from .fields import FieldSpec
 from .kernels import contact as ct
 from .kernels import poroelastic as pe
 from .kernels import flow as fk
+from .kernels import friction as fr
 from .kernels import heat as hk
 from .materials import NUSSELT
 from .model import FRACTURE, FRACTURE_DUAL, Domain, Model, PointTerm, traces
 
 #: canonical order of the fields (the order of the unknowns in the section)
-FIELD_ORDER = ("u", "lam", "pf", "pm", "Tf", "Tm")
+FIELD_ORDER = ("u", "lam", "tau", "pf", "pm", "Tf", "Tm")
 
 #: shift of the contact function relative to the displacement scale (kernels/contact.py)
 GAP_TOLERANCE = 1e-12
@@ -59,6 +60,7 @@ class ModelBuilder:
         self.elastic: Optional[pe.Elastic] = None
         self.mechanics: Optional[ct.FractureMechanics] = None
         self.aperture: Optional[ct.Aperture] = None
+        self.frictional: Optional[fr.Friction] = None
         self.flows: dict = {}
         self.heats: dict = {}
 
@@ -133,7 +135,21 @@ class ModelBuilder:
         self.model.add_field(FieldSpec("lam", 1, degree, Domain.FRACTURE))
         self.model.add(ct.fracture_mechanics_terms(self.mechanics))
         self.model.bounds["lam"] = (0.0, None)
+        if self.p.fracture_friction > 0 or self.p.fracture_cohesion > 0:
+            self.friction(degree, dual)
         return self.mechanics
+
+    def friction(self, degree: int, dual: bool) -> fr.Friction:
+        """The tangential traction tau (d - 1 components) with Coulomb's law
+        (kernels/friction.py); needs the dual pairing."""
+        if not dual:
+            raise InputError("option -thm_fracture_friction > 0 needs -thm_contact_pairing dual")
+        p = self.p
+        self.frictional = fr.Friction(self.mechanics, p.fracture_friction, p.fracture_cohesion,
+                                      p.rock_youngs_modulus)
+        self.model.add_field(FieldSpec("tau", self.dim - 1, degree, Domain.FRACTURE))
+        self.model.add(fr.friction_terms(self.frictional))
+        return self.frictional
 
     def joint_law(self) -> ct.JointLaw:
         p = self.p

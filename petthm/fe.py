@@ -233,3 +233,17 @@ def tabulate_dual(dim: int, degree: int, points: np.ndarray) -> Tabulation:
     t = tabulate(dim, degree, points)
     C = dual_coefficients(dim, degree)
     return Tabulation(t.phi @ C.T, np.einsum("qjd,kj->qkd", t.dphi, C), np.einsum("kj,jab->kab", C, t.hess))
+
+
+@functools.lru_cache(maxsize=None)
+def nodal_rule(dim: int, degree: int) -> Rule:
+    """The Lagrange nodes with the weights int phi~_k of the modified basis
+    (``modified_basis``): the rule under which a pointwise function of
+    nodal values, tested with the Lagrange basis, gives the nodal rows
+    D_k f(x_k) of the dual pairing (P1: the vertex rule; P2 segments:
+    Simpson's rule; P2 triangles: weights 2 alpha/3 and (1 - 2 alpha)/3 of
+    the area).  Used for the friction law (docs/contact.md)."""
+    r = rule(dim, 2 * degree)
+    phi = tabulate(dim, degree, r.points).phi
+    weights = modified_basis(dim, degree) @ (phi.T @ r.weights)
+    return Rule(reference_nodes(dim, degree), weights, degree)

@@ -163,6 +163,9 @@ DECLARED = {
                              "nodes of the u trace, dual basis: nodal contact for P1 and P2 u) or consistent "
                              "(P1 lam, L2 pairing: the scheme before issue 13)",
                              choices=("dual", "consistent")),
+    "fracture_friction": param(0.6, "-", "Coulomb friction coefficient mu_f of the fracture faces "
+                               "(0: frictionless; 0.6: Byerlee's rock friction)", lo=0.0),
+    "fracture_cohesion": param(0.0, "Pa", "cohesion c0 of the Coulomb law |tau| <= c0 + mu_f lam", lo=0.0),
     "fracture_heat_exchange": param("equilibrium", "-", "wall heat exchange: equilibrium, nusselt, or "
                                     "hw in W/(m2 K)", parse=parse_exchange),
     # state and wells (sections 2, 9)
@@ -188,7 +191,9 @@ ROCK_HEAT = ("rock_density", "rock_heat_capacity", "rock_conductivity")
 FLUID_HEAT = ("fluid_density", "fluid_heat_capacity", "fluid_conductivity")
 FLUID_FLOW = ("fluid_viscosity", "fluid_compressibility", "fluid_thermal_expansion")
 JOINT = ("fracture_aperture", "fracture_normal_stiffness", "fracture_residual_fraction")
-CONTACT = ("contact_pairing",)
+CONTACT = ("contact_pairing", "fracture_friction", "fracture_cohesion")
+#: the defaults of a scene whose reference solution is frictionless
+FRICTIONLESS = {"fracture_friction": 0.0}
 WELLS = ("injection_rate", "injection_temperature", "production_pressure", "well_radius")
 
 

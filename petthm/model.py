@@ -30,22 +30,29 @@ class Region:
     """A domain with a quadrature rule: ``lumped`` integrates with the vertex
     rule (row-sum lumping of P1 mass-type terms); ``dual``: Gauss, with the
     domain's own fields (the contact traction) in their dual basis
-    (``fe.tabulate_dual``; the multiplier pairing of docs/contact.md)."""
+    (``fe.tabulate_dual``; the multiplier pairing of docs/contact.md);
+    ``nodal``: the Lagrange nodes with the weights of the dual pairing
+    (``fe.nodal_rule``; the friction law, a function of nodal values)."""
     domain: Domain = Domain.MATRIX
     lumped: bool = False
     dual: bool = False
+    nodal: bool = False
+
+    def _key(self) -> tuple:
+        return (self.domain.value, self.lumped, self.dual, self.nodal)
 
     def __lt__(self, other: "Region") -> bool:     # matrix after fracture, lumped after Gauss
-        return (self.domain.value, self.lumped, self.dual) < (other.domain.value, other.lumped, other.dual)
+        return self._key() < other._key()
 
     def __str__(self) -> str:
-        return self.domain.value + ("@lumped" if self.lumped else "") + ("@dual" if self.dual else "")
+        return self.domain.value + "".join(f"@{k}" for k in ("lumped", "dual", "nodal") if getattr(self, k))
 
 
 MATRIX = Region(Domain.MATRIX)
 FRACTURE = Region(Domain.FRACTURE)
 FRACTURE_LUMPED = Region(Domain.FRACTURE, lumped=True)
 FRACTURE_DUAL = Region(Domain.FRACTURE, dual=True)
+FRACTURE_NODAL = Region(Domain.FRACTURE, nodal=True)
 MATRIX_LUMPED = Region(Domain.MATRIX, lumped=True)
 
 

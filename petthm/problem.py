@@ -58,6 +58,7 @@ class Problem:
         self._pc_blocks: PETSc.Mat | None = None
         self._pc_assemblers: list[Assembler] = []
         self._jacobian_point = None               # (xl, xdl, t, shift) of the last Jacobian
+        self.residual_shift = 1.0                 # 1/dt of a residual evaluated without a TS
         self._jvals: np.ndarray | None = None     # the Jacobian's COO values (reused buffer)
         self._ev_res = PETSc.Log.Event("thm.residual")
         self._ev_jac = PETSc.Log.Event("thm.jacobian")
@@ -138,13 +139,13 @@ class Problem:
         return tuple(float(v) for v in self.dm.comm.tompi4py().allreduce(np.array([net, tot])))
 
     # -- evaluation ------------------------------------------------------------------------
-    def local_residual(self, xl, xdl, t) -> np.ndarray:
+    def local_residual(self, xl, xdl, t, shift: float = 0.0) -> np.ndarray:
         """Scaled local residual of all regions and well terms (rows of every
-        local dof, constrained and tied ones included)."""
+        local dof, constrained and tied ones included); ``shift``: 1/dt."""
         asm = list(self.assemblers.values())
-        r = asm[0].residual(xl, xdl, t)
+        r = asm[0].residual(xl, xdl, t, shift)
         for a in asm[1:]:
-            r += a.residual(xl, xdl, t)
+            r += a.residual(xl, xdl, t, shift)
         for p in self.points:
             p.add_residual(r, xl, t, self.scales, self.inv_rscale)
         return r
@@ -152,7 +153,7 @@ class Problem:
     def ifunction(self, ts, t, X, Xdot, F):
         self._ev_res.begin()
         xl, xdl = self.local_arrays(X, t, Xdot)
-        rl = self.local_residual(xl, xdl, t)
+        rl = self.local_residual(xl, xdl, t, 1.0 / ts.getTimeStep() if ts is not None else self.residual_shift)
         self._Fl.getArray()[:] = rl
         F.zeroEntries()
         self.dm.localToGlobal(self._Fl, F, addv=PETSc.InsertMode.ADD_VALUES)

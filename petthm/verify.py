@@ -23,6 +23,7 @@ def _central_difference(problem, t: float, shift: float, X, Xdot, d, eps: float)
     """(F(X + eps d) - F(X - eps d)) / (2 eps) as a local array, with F
     evaluated along X(s) = X + s d, Xdot(s) = Xdot + shift s d."""
     F = []
+    problem.residual_shift = shift
     for s in (eps, -eps):
         Xs, Xds, Fs = X.duplicate(), Xdot.duplicate(), X.duplicate()
         Xs.waxpy(s, d, X)

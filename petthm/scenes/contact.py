@@ -132,7 +132,7 @@ class _SneddonMonitor(Monitor):
 class Sneddon(Scene):
     name = "sneddon"
     description = "pressurised penny (3D) or Griffith (2D) crack: opening against Sneddon's solution"
-    parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT),
+    parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT, **mt.FRICTIONLESS),
                   mt.group("Fluid pressure and in-situ stress", ("initial_pressure", "insitu_stress"),
                            initial_pressure=1e6, insitu_stress="0"),
                   SneddonParams)
@@ -254,7 +254,7 @@ class ContactPatch(Scene):
     name = "contact_patch"
     description = "closed fracture under compression and fluid pressure: lam = sigma - p, zero opening"
     parameters = (mt.group("Rock", mt.ELASTIC),
-                  mt.group("Fracture", mt.JOINT + mt.CONTACT, fracture_aperture=0.6e-3),
+                  mt.group("Fracture", mt.JOINT + mt.CONTACT, fracture_aperture=0.6e-3, **mt.FRICTIONLESS),
                   mt.group("Loads at the end of the ramp", ("insitu_stress", "initial_pressure"),
                            initial_pressure=20e6),
                   ContactPatchParams)
@@ -397,7 +397,7 @@ class _CrackScene(Scene):
 class PartialOpening(_CrackScene):
     name = "partial_opening"
     description = "crack under compression, centre pressurised above closure: open centre, closed rim"
-    parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT), PARTIAL_LOADS,
+    parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT, **mt.FRICTIONLESS), PARTIAL_LOADS,
                   PartialOpeningParams)
     time = TimeDefaults(final_time=1.0, dt_initial=0.1, mesh_size=0.0)
     history_columns = ("open_length", "opening_centre", "lam_max", "nodes_open")
@@ -465,7 +465,7 @@ class FractureInflation(_CrackScene):
     name = "fracture_inflation"
     description = "water injected at the centre of a closed crack: aperture from contact and opening, da/dt"
     parameters = (mt.group("Rock", mt.ELASTIC),
-                  mt.group("Fracture", mt.JOINT + mt.CONTACT, fracture_aperture=0.6e-3), PARTIAL_LOADS,
+                  mt.group("Fracture", mt.JOINT + mt.CONTACT, fracture_aperture=0.6e-3, **mt.FRICTIONLESS), PARTIAL_LOADS,
                   mt.group("Fluid and injection",
                            ("fluid_viscosity", "fluid_compressibility", "injection_rate"),
                            fluid_compressibility=0.0, injection_rate=1e-5),

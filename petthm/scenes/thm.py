@@ -142,7 +142,7 @@ class PennyImpermeable(Scene):
     parameters = (mt.group("Rock", mt.ELASTIC + mt.ROCK_HEAT + ("rock_porosity", "rock_thermal_expansion")),
                   mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_viscosity="water"),
                   mt.group("Fracture", mt.JOINT + mt.CONTACT + ("fracture_heat_exchange",),
-                           fracture_aperture=0.6e-3),
+                           fracture_aperture=0.6e-3, **mt.FRICTIONLESS),
                   mt.group("Wells, in-situ and initial state", mt.WELLS + (
                       "insitu_stress", "initial_pressure", "initial_temperature"),
                       injection_rate=1e-3, initial_pressure=20e6, production_pressure=20e6),

@@ -1,0 +1,178 @@
+"""Frictional contact scenes (physics.md section 3; kernels/friction.py).
+
+* ``friction_patch``: a fracture cutting the whole domain (normal to the
+  last axis, at mid-height) under its in-situ normal stress sigma, sheared
+  by a displacement delta(t) of the top face in x (ramped linearly) with
+  the bottom clamped.  The exact state is uniform: the shear stress
+  tau_s = min(G delta / H, mu_f sigma) (simple shear of both blocks), lam =
+  sigma, and the slip s = max(delta - mu_f sigma H / G, 0): stick while
+  G delta / H < mu_f sigma, slip after.  The faces x = 0 and x = W carry the
+  exact state's traction (0, +-tau_s) so that the state is uniform up to
+  them; the faces normal to y (3D) are free.  -thm_friction_shear_ratio is
+  the final G delta / (H mu_f sigma): below 1 the whole run sticks, above 1
+  the whole fracture passes from stick to slip in one step.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import materials as mt
+from .. import meshing, probes
+from ..assembly import FieldScale
+from ..constraints import Dirichlet
+from ..errors import InputError
+from ..fields import Domain, Side, Trace
+from ..kernels import poroelastic as pe
+from ..kernels.friction import tangent_basis
+from ..params import param
+from .base import Monitor, Scene, Setup, TimeDefaults, constant, register
+from .contact import contact_solver_defaults, fracture_normal, mechanics_model
+
+
+@dataclass(frozen=True)
+class FrictionPatchParams:
+    """Sheared fracture across the domain (friction_patch)"""
+    friction_dim: int = param(2, "-", "space dimension", choices=(2, 3))
+    friction_size: float = param(10.0, "m", "domain width and height H", lo=0.0, lo_open=True)
+    friction_shear_ratio: float = param(2.0, "-", "final G delta / (H mu_f sigma): < 1 stick, > 1 slip",
+                                        lo=0.0)
+
+
+def fracture_state(problem, X=None, t: float = 0.0):
+    """At the fracture's lam nodes on this rank (each node once): lam (n,),
+    tau (n, d - 1) and the tangential jump s (n, d - 1), in the tangent basis
+    of each face (kernels/friction.tangent_basis)."""
+    disc = problem.disc
+    surf = disc.regions[Domain.FRACTURE]
+    xl, _ = problem.local_arrays(X or problem.X, t)
+    lam_dofs = disc.region_dofs(Domain.FRACTURE, "lam")
+    nc, nb, d = lam_dofs.shape[0], lam_dofs.shape[1], surf.dim
+    lam = xl[lam_dofs] * problem.scales["lam"].scale
+    tau = xl[disc.region_dofs(Domain.FRACTURE, "tau")].reshape(nc, nb, d - 1) * problem.scales["tau"].scale
+    up, um = (xl[disc.region_dofs(Domain.FRACTURE, Trace("u", side))[:, :nb * d]].reshape(nc, nb, d)
+              for side in (Side.PLUS, Side.MINUS))
+    T = tangent_basis(surf.normals)                                             # (nc, d - 1, d)
+    s = np.einsum("cka,cia->cki", up - um, T) * problem.scales["u"].scale
+    _, first = np.unique(lam_dofs.ravel(), return_index=True)
+    return lam.ravel()[first], tau.reshape(-1, d - 1)[first], s.reshape(-1, d - 1)[first]
+
+
+class _FrictionPatchMonitor(Monitor):
+    def __init__(self, scene):
+        self.scene = scene
+        self.worst, self.last = {}, {}
+
+    def __call__(self, problem, t, X=None):
+        sc, comm = self.scene, problem.dm.comm
+        lam, tau, s = fracture_state(problem, X, t)
+        tau_s, slip = sc.exact(t)
+        bound = sc.p.fracture_friction * sc.sigma()
+        tau_ex = np.zeros(tau.shape[1])
+        tau_ex[0] = -tau_s                                  # tau opposes the + face's slip in +x
+        s_ex = np.zeros(tau.shape[1])
+        s_ex[0] = slip
+        mag = np.linalg.norm(tau, axis=1)
+        out = {"slip_max": probes.global_max(comm, np.linalg.norm(s, axis=1), empty=0.0),
+               "slip_exact": slip,
+               "slip_error": probes.global_max(comm, np.linalg.norm(s - s_ex, axis=1), empty=0.0),
+               "tau_error": probes.global_max(comm, np.linalg.norm(tau - tau_ex, axis=1), empty=0.0) / bound,
+               "lam_error": probes.global_max(comm, np.abs(lam - sc.sigma()), empty=0.0) / sc.sigma(),
+               "coulomb_max": probes.global_max(comm, mag - sc.p.fracture_friction * lam, empty=0.0) / bound}
+        slipping = slip > 0
+        out["law_error"] = probes.global_max(comm, np.abs(mag / np.maximum(
+            sc.p.fracture_friction * lam, 1e-300) - 1.0), empty=0.0) if slipping else 0.0
+        for k in ("slip_error", "tau_error", "lam_error", "law_error"):
+            self.worst[k] = max(self.worst.get(k, 0.0), out[k])
+        self.worst["stick_slip_max"] = max(self.worst.get("stick_slip_max", 0.0),
+                                           0.0 if slipping else out["slip_max"])
+        self.last = out
+        return out
+
+    def report(self, problem, t):
+        return {"error": dict(self.worst), "slip_final": self.last.get("slip_max"),
+                "slip_exact_final": self.scene.exact(t)[1]}
+
+
+@register
+class FrictionPatch(Scene):
+    name = "friction_patch"
+    description = "sheared fracture across the domain: stick below mu_f sigma, then uniform slip"
+    parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT),
+                  mt.group("In-situ stress", ("insitu_stress",)), FrictionPatchParams)
+    time = TimeDefaults(final_time=1.0, dt_initial=0.2, mesh_size=2.5)
+    history_columns = ("slip_max", "slip_exact", "slip_error", "tau_error", "lam_error", "coulomb_max",
+                       "law_error")
+
+    @property
+    def H(self) -> float:
+        return self.p.friction_size
+
+    def shear_modulus(self) -> float:
+        p = self.p
+        return p.rock_youngs_modulus / (2 * (1 + p.rock_poisson_ratio))
+
+    def sigma(self) -> float:
+        return self.p.normal_stress(fracture_normal(self.p.friction_dim))
+
+    def delta(self, t: float) -> float:
+        """Top displacement in x at time t (linear ramp to the final ratio)."""
+        p = self.p
+        final = p.friction_shear_ratio * self.H * p.fracture_friction * self.sigma() / self.shear_modulus()
+        return final * min(t / self.final_time, 1.0)
+
+    def exact(self, t: float) -> tuple[float, float]:
+        """(shear stress tau_s, slip s) of the uniform state at time t."""
+        G, H, b = self.shear_modulus(), self.H, self.p.fracture_friction * self.sigma()
+        d = self.delta(t)
+        return min(G * d / H, b), max(d - b * H / G, 0.0)
+
+    def boundaries(self):
+        W, d = self.H, self.p.friction_dim
+        out = {"bottom": lambda x: np.isclose(x[:, -1], 0.0), "top": lambda x: np.isclose(x[:, -1], W),
+               "left": lambda x: np.isclose(x[:, 0], 0.0), "right": lambda x: np.isclose(x[:, 0], W)}
+        if d == 3:
+            out["front"] = lambda x: np.isclose(x[:, 1], 0.0) | np.isclose(x[:, 1], W)
+        return out
+
+    def generate_mesh(self, path, size):
+        W, d = self.H, self.p.friction_dim
+        if d == 2:
+            fr = [meshing.Fracture("segment", p0=(-W, 0.5 * W), p1=(2 * W, 0.5 * W))]
+        else:
+            fr = [meshing.Fracture("rectangle", center=(0.5 * W, 0.5 * W, 0.5 * W), half=(1.5 * W, 1.5 * W))]
+        return meshing.box_with_fractures(path, [W] * d, size, fr)
+
+    def build(self, mesh, degree):
+        p = self.p
+        d = mesh.dim
+        if d != p.friction_dim:
+            raise InputError(f"option -thm_friction_dim = {p.friction_dim} but the mesh is {d}D")
+        sigma = self.sigma()
+        if not sigma > 0:
+            raise InputError(f"option -thm_insitu_stress = {sigma:g}: friction_patch needs a compressive "
+                             "normal stress on the fracture")
+        if p.fracture_friction <= 0:
+            raise InputError("option -thm_fracture_friction must be > 0 for friction_patch")
+        u_scale = p.fracture_friction * sigma * self.H / self.shear_modulus()
+        model, _ = mechanics_model(p, mesh, degree, lambda x, t: 0.0, sigma, u_scale)
+        ex = np.zeros(d)
+        ex[-1] = 1.0
+
+        def side_traction(sign):
+            return lambda x, t: sign * ex * self.exact(t)[0]
+        model.facets.append(pe.traction("u", "right", side_traction(1.0)))
+        model.facets.append(pe.traction("u", "left", side_traction(-1.0)))
+        rate = self.delta(self.final_time) / self.final_time
+        bcs = [Dirichlet("u", "bottom", lambda x, t: np.zeros((len(x), d)), components=tuple(range(d))),
+               Dirichlet("u", "top", lambda x, t: np.full(len(x), self.delta(t)),
+                         rate=lambda x, t: np.full(len(x), rate if t < self.final_time else 0.0),
+                         components=(0,))]
+        if d == 3:
+            bcs.append(Dirichlet("u", "top", lambda x, t: np.zeros(len(x)), components=(1,)))
+        scales = {"u": FieldScale(u_scale), "lam": FieldScale(sigma), "tau": FieldScale(sigma)}
+        return Setup(model, bcs, scales, {"lam": constant(sigma)}, _FrictionPatchMonitor(self))
+
+    def solver_defaults(self, comm):
+        return contact_solver_defaults(comm)
