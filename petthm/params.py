@@ -189,7 +189,8 @@ class RunParams:
     quiet: bool = param(False, "-", "no per-step progress line")
     pc_reuse: str = param("auto", "-", "reuse the preconditioner across Newton iterations and time "
                           "steps, rebuilt when the extra Krylov iterations have cost a set-up or a step "
-                          "fails: on, off, or auto (on for a direct solve)", choices=("auto", "on", "off"))
+                          "fails: on, off, or auto (on for a direct solve without friction)",
+                          choices=("auto", "on", "off"))
     pc_reuse_max_krylov: int = param(0, "-", "rebuild a reused preconditioner after a linear solve with "
                                      "more iterations than this (0: the cost rule of -thm_pc_reuse)", lo=0)
     direct_max_unknowns: int = param(50000, "-", "scenes with displacement propose the block "

@@ -153,7 +153,8 @@ class Problem:
     def ifunction(self, ts, t, X, Xdot, F):
         self._ev_res.begin()
         xl, xdl = self.local_arrays(X, t, Xdot)
-        rl = self.local_residual(xl, xdl, t, 1.0 / ts.getTimeStep() if ts is not None else self.residual_shift)
+        shift = 1.0 / ts.getTimeStep() if ts is not None else self.residual_shift
+        rl = self.local_residual(xl, xdl, t, shift)
         self._Fl.getArray()[:] = rl
         F.zeroEntries()
         self.dm.localToGlobal(self._Fl, F, addv=PETSc.InsertMode.ADD_VALUES)

@@ -97,7 +97,8 @@ def slip_increment(fr: Friction, ctx) -> np.ndarray:
     the tangential jump over the step (zero where no step is known)."""
     m = fr.mech
     jump = ctx.dot(m.trace(Side.PLUS)) - ctx.dot(m.trace(Side.MINUS))
-    rate = np.einsum("cqd,cqid->cqi", jump, np.broadcast_to(_tangents(ctx), jump.shape[:2] + _tangents(ctx).shape[2:]))
+    T = _tangents(ctx)
+    rate = np.einsum("cqd,cqid->cqi", jump, np.broadcast_to(T, jump.shape[:2] + T.shape[2:]))
     return rate / ctx.shift if ctx.shift > 0 else np.zeros_like(rate)
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from .. import params as P
 from ..assembly import FieldScale
 from ..constraints import Dirichlet
+from ..fracture import TIP_BC
 from ..materials import Parameters
 from ..model import Model
 
@@ -57,6 +58,27 @@ class Setup:
     scales: dict[str, FieldScale]
     initial: dict[str, Callable[[np.ndarray], np.ndarray]] = field(default_factory=dict)
     monitor: Monitor = field(default_factory=Monitor)
+
+    def __post_init__(self):
+        """The tangential traction (friction) takes the normal traction's scale."""
+        if self.model.has("tau") and "tau" not in self.scales:
+            self.scales["tau"] = FieldScale(self.scales["lam"].scale)
+
+
+def tip_tractions(model: Model, lam: Callable, symmetry: dict | None = None) -> list[Dirichlet]:
+    """The contact tractions on the fracture front, where u is not split:
+    lam = ``lam(x, t)`` and, with friction, tau = 0 (the front's rows would
+    otherwise not determine them); ``symmetry``: {boundary: tangential
+    component} of the symmetry planes that cut the fracture: there the
+    jump of u along that tangent is held at 0, and the shear traction along
+    it vanishes by symmetry (tau_i = 0)."""
+    out = [Dirichlet("lam", TIP_BC, lam)]
+    if model.has("tau"):
+        m = model.fields[[f.name for f in model.fields].index("tau")].ncomp
+        out.append(Dirichlet("tau", TIP_BC, lambda x, t: np.zeros((len(x), m))))
+        out += [Dirichlet("tau", b, lambda x, t: np.zeros(len(x)), components=(i,))
+                for b, i in (symmetry or {}).items()]
+    return out
 
 
 def constant(value: float) -> Callable:

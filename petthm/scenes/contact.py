@@ -30,13 +30,13 @@ from ..assembly import FieldScale
 from ..builders import ModelBuilder
 from ..constraints import Dirichlet
 from ..errors import InputError
-from ..fracture import TIP_BC
 from ..kernels import contact as ct
 from ..kernels import poroelastic as pe
 from ..model import FRACTURE
 from ..monitors import fracture_vertices
 from ..params import param, with_defaults
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, zero
+from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
+                   zero)
 
 #: a vertex counts as open where lam is below this fraction of the stress scale
 OPEN_TRACTION = 1e-9
@@ -199,8 +199,8 @@ class Sneddon(Scene):
         model, mech = mechanics_model(p, mesh, degree, lambda x, t: sn + pn, sn, w0)
         d = mesh.dim
         bcs = [Dirichlet("u", "far", lambda x, t: np.zeros((len(x), d))),
-               Dirichlet("u", "sym_x", zero, components=(0,)),
-               Dirichlet("lam", TIP_BC, zero)]
+               Dirichlet("u", "sym_x", zero, components=(0,))]
+        bcs += tip_tractions(model, zero, {"sym_x": 0, "sym_y": 1} if d == 3 else {"sym_x": 0})
         if d == 3:
             bcs.append(Dirichlet("u", "sym_y", zero, components=(1,)))
         scales = {"u": FieldScale(w0), "lam": FieldScale(pn + sn)}
@@ -307,6 +307,9 @@ class ContactPatch(Scene):
         model.facets.append(pe.traction("u", "top", lambda x, t: top * sigma * (self.ramp(t) - f)))
         bcs = [Dirichlet("u", "bottom", zero, components=(d - 1,))]
         bcs += [Dirichlet("u", f"side{k}", zero, components=(k,)) for k in range(d - 1)]
+        # the rollers hold the jump along the sides' normals: no tip here, tau_k = 0 there (friction)
+        bcs += tip_tractions(model, constant_in_time(self.exact_lam(0.0)),
+                             {f"side{k}": k for k in range(d - 1)})[1:]
         scales = {"u": FieldScale(u_scale), "lam": FieldScale(sigma)}
         law = ModelBuilder(p, d).joint_law()
         return Setup(model, bcs, scales, {"lam": constant(self.exact_lam(0.0))},
@@ -384,10 +387,9 @@ class _CrackScene(Scene):
     def normal_stress(self) -> float:
         return self.p.normal_stress(fracture_normal(2))
 
-    def crack_bcs(self):
+    def crack_bcs(self, model):
         return [Dirichlet("u", "far", lambda x, t: np.zeros((len(x), 2))),
-                Dirichlet("u", "sym_x", zero, components=(0,)),
-                Dirichlet("lam", TIP_BC, zero)]
+                Dirichlet("u", "sym_x", zero, components=(0,))] + tip_tractions(model, zero, {"sym_x": 0})
 
     def solver_defaults(self, comm):
         return contact_solver_defaults(comm)
@@ -397,8 +399,8 @@ class _CrackScene(Scene):
 class PartialOpening(_CrackScene):
     name = "partial_opening"
     description = "crack under compression, centre pressurised above closure: open centre, closed rim"
-    parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT, **mt.FRICTIONLESS), PARTIAL_LOADS,
-                  PartialOpeningParams)
+    parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT, **mt.FRICTIONLESS),
+                  PARTIAL_LOADS, PartialOpeningParams)
     time = TimeDefaults(final_time=1.0, dt_initial=0.1, mesh_size=0.0)
     history_columns = ("open_length", "opening_centre", "lam_max", "nodes_open")
 
@@ -421,7 +423,7 @@ class PartialOpening(_CrackScene):
         w_ref = 4 * (1 - nu ** 2) * (p.partial_peak_pressure - sn) / E * c
         model, _ = mechanics_model(p, mesh, degree, self.pressure, sn, w_ref)
         scales = {"u": FieldScale(w_ref), "lam": FieldScale(sn)}
-        return Setup(model, self.crack_bcs(), scales, {"lam": constant(sn - p.initial_pressure)},
+        return Setup(model, self.crack_bcs(model), scales, {"lam": constant(sn - p.initial_pressure)},
                      _ProfileMonitor(self))
 
 
@@ -465,7 +467,8 @@ class FractureInflation(_CrackScene):
     name = "fracture_inflation"
     description = "water injected at the centre of a closed crack: aperture from contact and opening, da/dt"
     parameters = (mt.group("Rock", mt.ELASTIC),
-                  mt.group("Fracture", mt.JOINT + mt.CONTACT, fracture_aperture=0.6e-3, **mt.FRICTIONLESS), PARTIAL_LOADS,
+                  mt.group("Fracture", mt.JOINT + mt.CONTACT, fracture_aperture=0.6e-3, **mt.FRICTIONLESS),
+                  PARTIAL_LOADS,
                   mt.group("Fluid and injection",
                            ("fluid_viscosity", "fluid_compressibility", "injection_rate"),
                            fluid_compressibility=0.0, injection_rate=1e-5),
@@ -490,4 +493,6 @@ class FractureInflation(_CrackScene):
         b.wells([wells.injector((0.0, 0.0), p.injection_rate, 0.0, None, T=None)])
         scales = {"u": FieldScale(w_ref), "lam": FieldScale(sn), "pf": FieldScale(sn, p.initial_pressure)}
         init = {"lam": constant(sn - p.initial_pressure), "pf": constant(p.initial_pressure)}
-        return Setup(b.build(), self.crack_bcs(), scales, init, _InflationMonitor(self, mech, b.aperture.law))
+        model = b.build()
+        return Setup(model, self.crack_bcs(model), scales, init,
+                     _InflationMonitor(self, mech, b.aperture.law))

@@ -5,12 +5,12 @@
   by a displacement delta(t) of the top face in x (ramped linearly) with
   the bottom clamped.  The exact state is uniform: the shear stress
   tau_s = min(G delta / H, mu_f sigma) (simple shear of both blocks), lam =
-  sigma, and the slip s = max(delta - mu_f sigma H / G, 0): stick while
-  G delta / H < mu_f sigma, slip after.  The faces x = 0 and x = W carry the
+  sigma, and the slip s = max(delta - b H / G, 0) with the bound
+  b = c0 + mu_f sigma: stick while G delta / H < b, slip after.  The faces x = 0 and x = W carry the
   exact state's traction (0, +-tau_s) so that the state is uniform up to
   them; the faces normal to y (3D) are free.  -thm_friction_shear_ratio is
-  the final G delta / (H mu_f sigma): below 1 the whole run sticks, above 1
-  the whole fracture passes from stick to slip in one step.
+  the final G delta / (H b): below 1 the whole run sticks, above 1 the
+  whole fracture passes from stick to slip in one step.
 """
 from __future__ import annotations
 
@@ -36,8 +36,8 @@ class FrictionPatchParams:
     """Sheared fracture across the domain (friction_patch)"""
     friction_dim: int = param(2, "-", "space dimension", choices=(2, 3))
     friction_size: float = param(10.0, "m", "domain width and height H", lo=0.0, lo_open=True)
-    friction_shear_ratio: float = param(2.0, "-", "final G delta / (H mu_f sigma): < 1 stick, > 1 slip",
-                                        lo=0.0)
+    friction_shear_ratio: float = param(2.0, "-", "final G delta / (H b), b = c0 + mu_f sigma: < 1 stick, "
+                                        "> 1 slip", lo=0.0)
 
 
 def fracture_state(problem, X=None, t: float = 0.0):
@@ -68,7 +68,7 @@ class _FrictionPatchMonitor(Monitor):
         sc, comm = self.scene, problem.dm.comm
         lam, tau, s = fracture_state(problem, X, t)
         tau_s, slip = sc.exact(t)
-        bound = sc.p.fracture_friction * sc.sigma()
+        bound = sc.bound()
         tau_ex = np.zeros(tau.shape[1])
         tau_ex[0] = -tau_s                                  # tau opposes the + face's slip in +x
         s_ex = np.zeros(tau.shape[1])
@@ -79,10 +79,10 @@ class _FrictionPatchMonitor(Monitor):
                "slip_error": probes.global_max(comm, np.linalg.norm(s - s_ex, axis=1), empty=0.0),
                "tau_error": probes.global_max(comm, np.linalg.norm(tau - tau_ex, axis=1), empty=0.0) / bound,
                "lam_error": probes.global_max(comm, np.abs(lam - sc.sigma()), empty=0.0) / sc.sigma(),
-               "coulomb_max": probes.global_max(comm, mag - sc.p.fracture_friction * lam, empty=0.0) / bound}
+               "coulomb_max": probes.global_max(comm, mag - sc.local_bound(lam), empty=0.0) / bound}
         slipping = slip > 0
-        out["law_error"] = probes.global_max(comm, np.abs(mag / np.maximum(
-            sc.p.fracture_friction * lam, 1e-300) - 1.0), empty=0.0) if slipping else 0.0
+        out["law_error"] = probes.global_max(comm, np.abs(mag / sc.local_bound(lam) - 1.0),
+                                             empty=0.0) if slipping else 0.0
         for k in ("slip_error", "tau_error", "lam_error", "law_error"):
             self.worst[k] = max(self.worst.get(k, 0.0), out[k])
         self.worst["stick_slip_max"] = max(self.worst.get("stick_slip_max", 0.0),
@@ -116,15 +116,22 @@ class FrictionPatch(Scene):
     def sigma(self) -> float:
         return self.p.normal_stress(fracture_normal(self.p.friction_dim))
 
+    def bound(self) -> float:
+        """b = c0 + mu_f sigma: the shear stress at which the fracture slips."""
+        return self.p.fracture_cohesion + self.p.fracture_friction * self.sigma()
+
+    def local_bound(self, lam):
+        """c0 + mu_f lam at the nodes."""
+        return self.p.fracture_cohesion + self.p.fracture_friction * lam
+
     def delta(self, t: float) -> float:
         """Top displacement in x at time t (linear ramp to the final ratio)."""
-        p = self.p
-        final = p.friction_shear_ratio * self.H * p.fracture_friction * self.sigma() / self.shear_modulus()
+        final = self.p.friction_shear_ratio * self.H * self.bound() / self.shear_modulus()
         return final * min(t / self.final_time, 1.0)
 
     def exact(self, t: float) -> tuple[float, float]:
         """(shear stress tau_s, slip s) of the uniform state at time t."""
-        G, H, b = self.shear_modulus(), self.H, self.p.fracture_friction * self.sigma()
+        G, H, b = self.shear_modulus(), self.H, self.bound()
         d = self.delta(t)
         return min(G * d / H, b), max(d - b * H / G, 0.0)
 
@@ -153,9 +160,10 @@ class FrictionPatch(Scene):
         if not sigma > 0:
             raise InputError(f"option -thm_insitu_stress = {sigma:g}: friction_patch needs a compressive "
                              "normal stress on the fracture")
-        if p.fracture_friction <= 0:
-            raise InputError("option -thm_fracture_friction must be > 0 for friction_patch")
-        u_scale = p.fracture_friction * sigma * self.H / self.shear_modulus()
+        if not self.bound() > 0:
+            raise InputError("friction_patch needs friction: -thm_fracture_friction > 0 or "
+                             "-thm_fracture_cohesion > 0")
+        u_scale = self.bound() * self.H / self.shear_modulus()
         model, _ = mechanics_model(p, mesh, degree, lambda x, t: 0.0, sigma, u_scale)
         ex = np.zeros(d)
         ex[-1] = 1.0

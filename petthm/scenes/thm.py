@@ -29,10 +29,10 @@ from ..builders import ModelBuilder
 from ..constraints import Dirichlet
 from ..errors import InputError
 from ..fields import Domain
-from ..fracture import TIP_BC
 from ..monitors import FractureWells, contact_node_checks, fracture_vertices
 from ..params import CELSIUS, param
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, zero
+from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
+                   zero)
 from .contact import OPEN_TRACTION, contact_solver_defaults, fracture_normal
 from .fractured import WellsMonitor, heat_wells_monitor, transmissivity
 
@@ -239,8 +239,8 @@ class PennyImpermeable(Scene):
         bcs = [Dirichlet("u", "sym_y", zero, components=(1,)),
                Dirichlet("u", "far_x", zero, components=(0,)),
                Dirichlet("u", "far_y", zero, components=(1,)),
-               Dirichlet("u", "far_z", zero, components=(2,)),
-               Dirichlet("lam", TIP_BC, constant_in_time(lam_tip))]
+               Dirichlet("u", "far_z", zero, components=(2,))]
+        bcs += tip_tractions(b.model, constant_in_time(lam_tip), {"sym_y": 1})
         bcs += [Dirichlet("Tm", f, constant_in_time(T0)) for f in ("far_x", "far_y", "far_z")]
         mu = p.fluid_viscosity
         dp = float(p.injection_rate * 12 * mu.mu(Ti) / (2 * np.pi * a_ref ** 3)

@@ -1,0 +1,127 @@
+"""Coulomb friction (issue 13): the friction law's Jacobian, the
+friction_patch scene (stick, slip and the step between them; P1/P2, 2D/3D,
+serial = 2 ranks), stiff cases, and friction switched on where the
+reference solution has no shear."""
+import json
+
+import numpy as np
+import pytest
+
+from petthm.verify import jacobian_fd_block_errors
+
+from conftest import build_problem
+
+FRICTION_BLOCKS = [("tau", "tau"), ("tau", "lam"), ("tau", "u"), ("u", "tau")]
+
+
+def _friction_problem(tmp_path, dim, degree):
+    return build_problem(tmp_path, "friction_patch", thm_friction_dim=dim, thm_fe_degree=degree,
+                         thm_mesh_size=5)
+
+
+@pytest.mark.parametrize("dim,degree", [(2, 2), (3, 1), (3, 2)])
+@pytest.mark.parametrize("state,shift", [("stick", 1e8), ("slip", 1e-3)])
+def test_friction_jacobian_matches_finite_differences(tmp_path, dim, degree, state, shift):
+    """At a random state the slip increment ds = s_dot / shift is tiny for a
+    large shift (every node sticks: |tau - c ds| < b) and huge for a small
+    one (every node slips); away from the switch each friction block
+    matches central differences to 1e-6.  Zero blocks: in stick C = c ds
+    (no tau, lam); in 2D slip C = tau - b sign(z) (no u)."""
+    problem = _friction_problem(tmp_path, dim, degree)
+    err = jacobian_fd_block_errors(problem, t=0.5, shift=shift, eps=(1e-6, 1e-7))
+    print(state, {k: f"{v:.1e}" for k, v in err.items() if "tau" in k})
+    zero = [("tau", "tau"), ("tau", "lam")] if state == "stick" else [("tau", "u")] if dim == 2 else []
+    for block in FRICTION_BLOCKS:
+        if block in zero:
+            assert block not in err
+        else:
+            assert err[block] <= 1e-6, (block, err[block])
+
+
+def test_friction_jacobian_check_detects_a_missing_block(tmp_path):
+    """Negative control: without d(law)/d(lam) the slip state's check fails."""
+    problem = _friction_problem(tmp_path, 3, 1)
+    from petthm.model import FRACTURE_NODAL
+    asm = problem.region(FRACTURE_NODAL)
+    asm.model.jacobians[:] = [j for j in asm.model.jacobians if not (j.test == "tau" and j.trial == "lam")]
+    asm._build_pattern()
+    problem.J = None
+    err = jacobian_fd_block_errors(problem, t=0.5, shift=1e-3, eps=1e-6)
+    assert err[("tau", "lam")] > 1e-2, err
+
+
+def _summary(path):
+    return json.load(open(path / "summary.json"))
+
+
+@pytest.mark.parametrize("dim,degree", [(2, 1), (2, 2), (3, 1), (3, 2)])
+def test_friction_patch_stick_then_slip(tmp_path, petthm_run, dim, degree):
+    """Shear ramped to twice the slip threshold in 5 steps: steps 1-2 stick
+    (slip <= 1e-12 m), step 3 takes the whole fracture from stick to slip,
+    steps 3-5 slip with |tau| = mu_f lam (1e-8) and the exact uniform slip
+    and traction."""
+    _, s = petthm_run("friction_patch", tmp_path, "-thm_friction_dim", dim, "-thm_fe_degree", degree)
+    e = s["error"]
+    print(dim, degree, e)
+    assert s["status"] == "completed" and s["rejected_steps"] == 0
+    assert e["stick_slip_max"] <= 1e-12 and e["law_error"] <= 1e-8
+    assert e["slip_error"] <= 1e-9 * s["slip_exact_final"]
+    assert e["tau_error"] <= 1e-8 and e["lam_error"] <= 1e-10
+    assert s["slip_final"] == pytest.approx(s["slip_exact_final"], rel=1e-8) and s["slip_exact_final"] > 0
+
+
+def test_friction_patch_below_the_bound_sticks(tmp_path, petthm_run):
+    """Final shear at 0.9 of the bound: no slip at any step (<= 1e-12 m)."""
+    _, s = petthm_run("friction_patch", tmp_path, "-thm_friction_dim", 3, "-thm_friction_shear_ratio", 0.9)
+    assert s["status"] == "completed" and s["slip_exact_final"] == 0.0
+    assert s["slip_final"] <= 1e-12 and s["error"]["tau_error"] <= 1e-8
+
+
+@pytest.mark.parametrize("opts", [("-thm_fracture_friction", 1.0),
+                                  ("-thm_fracture_friction", 0.0, "-thm_fracture_cohesion", 5e6)],
+                         ids=["mu1", "mu0_cohesion"])
+def test_friction_patch_stiff_coefficients(tmp_path, petthm_run, opts):
+    """mu_f = 1 (2D P2), and mu_f = 0 with a cohesion only (the law's bound
+    without lam): stick, then slip at |tau| = b."""
+    _, s = petthm_run("friction_patch", tmp_path, *opts)
+    e = s["error"]
+    assert s["status"] == "completed"
+    assert e["stick_slip_max"] <= 1e-12 and e["law_error"] <= 1e-8
+    assert e["slip_error"] <= 1e-9 * s["slip_exact_final"]
+
+
+def test_friction_patch_two_ranks_equal_serial(tmp_path, petthm_run):
+    """3D P2 on 2 ranks: the same history as the serial run (1e-12 of the slip)."""
+    _, s1 = petthm_run("friction_patch", tmp_path / "np1", "-thm_friction_dim", 3)
+    _, s2 = petthm_run("friction_patch", tmp_path / "np2", "-thm_friction_dim", 3, ranks=2)
+    import csv
+    h1 = list(csv.DictReader(open(tmp_path / "np1" / "history.csv")))
+    h2 = list(csv.DictReader(open(tmp_path / "np2" / "history.csv")))
+    assert len(h1) == len(h2)
+    for a, b in zip(h1, h2):
+        assert abs(float(a["slip_max"]) - float(b["slip_max"])) <= 1e-12 * max(s1["slip_exact_final"], 1e-300)
+    assert s2["error"]["law_error"] <= 1e-8 and s2["error"]["stick_slip_max"] <= 1e-12
+
+
+@pytest.mark.parametrize("stiffness", [1e8, 1e14])
+def test_friction_on_a_closed_patch_with_stiff_joints(tmp_path, petthm_run, stiffness):
+    """contact_patch (no shear) with friction on and Kn from 1e8 to 1e14
+    Pa/m: the frictionless result (lam = sigma - p, zero opening)."""
+    _, s = petthm_run("contact_patch", tmp_path, "-thm_fracture_friction", 0.6,
+                      "-thm_fracture_normal_stiffness", stiffness)
+    assert s["status"] == "completed"
+    assert s["error"]["lam_error"] <= 1e-10 and s["error"]["opening_max"] <= 1e-9
+
+
+def test_friction_where_there_is_no_shear_changes_nothing(tmp_path, petthm_run):
+    """partial_opening (mirror-symmetric about the crack) with mu_f = 0.6
+    against frictionless: the same opening profile and open zone (the
+    unstructured mesh is not exactly symmetric: 1e-6 of the opening,
+    measured)."""
+    _, a = petthm_run("partial_opening", tmp_path / "mu0", "-thm_partial_crack_size", 0.05)
+    _, b = petthm_run("partial_opening", tmp_path / "mu06", "-thm_partial_crack_size", 0.05,
+                      "-thm_fracture_friction", 0.6)
+    ga, gb = np.array(a["profile"]["opening"]), np.array(b["profile"]["opening"])
+    print("opening difference", np.abs(ga - gb).max(), "of", ga.max())
+    assert a["open_length"] == b["open_length"]
+    assert np.abs(ga - gb).max() <= 1e-5 * ga.max()
