@@ -116,8 +116,8 @@ class ModelBuilder:
         return h
 
     # -- fracture mechanics ----------------------------------------------------------------
-    def contact(self, *, normal_stress: float, u_scale: float, pressure: Optional[Callable] = None) -> \
-            ct.FractureMechanics:
+    def contact(self, *, normal_stress: float, u_scale: float, pressure: Optional[Callable] = None,
+                insitu_shear: tuple = ()) -> ct.FractureMechanics:
         """lam >= 0 with the face loads pf + lam + sigma0_nn on u+-
         (kernels/contact.py); the fluid pressure is the field pf (when the
         model has fracture flow) or a prescribed ``pressure(x, t)``.
@@ -125,10 +125,13 @@ class ModelBuilder:
         ``u_scale``: the displacement scale (the VI's gap tolerance).  lam
         has the degree of u, paired in the dual basis
         (``-thm_contact_pairing dual``), or is P1 with the consistent
-        pairing (``consistent``)."""
+        pairing (``consistent``).  ``insitu_shear``: sigma0 . n (a constant
+        vector) whose tangential part the friction carries in the in-situ
+        state (needs friction)."""
         dual = self.p.contact_pairing == "dual"
         self.mechanics = ct.FractureMechanics(self.dim, pf=None if pressure else "pf", pressure=pressure,
                                               insitu_normal_stress=-normal_stress,
+                                              insitu_shear=tuple(insitu_shear),
                                               gap_tolerance=GAP_TOLERANCE * u_scale,
                                               pairing=FRACTURE_DUAL if dual else FRACTURE)
         degree = self.model.fields[[f.name for f in self.model.fields].index("u")].degree if dual else 1

@@ -54,6 +54,8 @@ class FractureMechanics:
     pf: Optional[str] = None                   # fracture pressure field, or
     pressure: Optional[Callable] = None        # a prescribed pf(x, t) (SI), x (nc, nq, d)
     insitu_normal_stress: float = 0.0          # sigma0_nn, tension positive
+    insitu_shear: tuple = ()                   # sigma0 . n (global, constant), its tangential part is
+                                               # carried by the friction traction tau in the in-situ state
     gap_tolerance: float = 0.0                 # m, see ``_gap_f0``
     region: Region = FRACTURE
     pairing: Region = FRACTURE_DUAL            # where lam meets u (FRACTURE: the consistent pairing)
@@ -99,9 +101,16 @@ def fluid_load(fm: FractureMechanics, ctx):
 
 
 def _face_load(fm: FractureMechanics, sign: float, ctx):
-    """-sign (pf + sigma0_nn) n: the fluid's load on the + (sign = 1) or
-    - (sign = -1) face's rock (the consistent pairing)."""
-    return -sign * fluid_load(fm, ctx)[..., None] * ctx.normals
+    """-sign ((pf + sigma0_nn) n + sigma0_t): the fluid's and the in-situ
+    stress's load on the + (sign = 1) or - (sign = -1) face's rock (the
+    consistent pairing); sigma0_t = (I - n n) sigma0 n, the in-situ shear on
+    the plane, which the friction traction tau = -sigma0_t carries in the
+    in-situ state (kernels/friction.py)."""
+    load = fluid_load(fm, ctx)[..., None] * ctx.normals
+    if len(fm.insitu_shear):
+        s = np.asarray(fm.insitu_shear, dtype=float)
+        load = load + (s - np.einsum("cqa,a->cq", ctx.normals, s)[..., None] * ctx.normals)
+    return -sign * load
 
 
 def _contact_load(fm: FractureMechanics, sign: float, ctx):
