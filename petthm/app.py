@@ -24,6 +24,7 @@ from .errors import InputError
 from .fields import Discretisation
 from .mesh import Mesh, distribute, label_boundaries, read_plex
 from .model import Domain
+from .monitors import contact_node_fields
 from .output import FieldWriter, History, write_summary
 from .problem import Problem
 from .scenes.base import REGISTRY
@@ -239,7 +240,11 @@ class Run:
         def write_fields(t):
             s, t1 = self._stage("output")
             for w, fields in writers:
-                w.write(t, {f.name: self._si_out(problem, f.name, t) for f in fields})
+                out = {f.name: self._si_out(problem, f.name, t) for f in fields}
+                if any(f.name == "lam" for f in fields):          # opening, aperture, slip, ...
+                    out.update({k: v for k, v in contact_node_fields(problem, t=t).items()
+                                if k not in ("weight", "slipping_area")})
+                w.write(t, out)
             self._pop("output", s, t1)
 
         def monitor(step, t, X):

@@ -151,6 +151,7 @@ class ModelBuilder:
         self.frictional = fr.Friction(self.mechanics, p.fracture_friction, p.fracture_cohesion,
                                       p.rock_youngs_modulus)
         self.model.add_field(FieldSpec("tau", self.dim - 1, degree, Domain.FRACTURE))
+        self.model.friction = self.frictional
         self.model.add(fr.friction_terms(self.frictional))
         return self.frictional
 
@@ -162,6 +163,7 @@ class ModelBuilder:
     def deformable(self, mechanics: ct.FractureMechanics) -> ct.Aperture:
         """The aperture a(lam, g) that fracture flow and heat use."""
         self.aperture = ct.Aperture(mechanics, self.joint_law())
+        self.model.aperture = self.aperture
         return self.aperture
 
     # -- fracture flow and heat -------------------------------------------------------------

@@ -120,6 +120,8 @@ class Model:
     ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
     bounds: dict = field(default_factory=dict)    # {field: (lower, upper)} SI, None: unbounded
     preconditioner: list[CellJacobian] = field(default_factory=list)
+    aperture: Optional[object] = None             # kernels.contact.Aperture (deformable fracture; outputs)
+    friction: Optional[object] = None             # kernels.friction.Friction (outputs)
 
     def regions(self) -> list[Region]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

@@ -227,3 +227,57 @@ def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0)
     a, b = EDGES[r][:, 0], EDGES[r][:, 1]
     second = np.abs(lam[:, r + 1:] - 0.5 * (lam[:, a] + lam[:, b])) * (closed[:, a] & closed[:, b])
     return opening, second.max(axis=1)
+
+
+def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray]:
+    """Fracture outputs at the contact traction's nodes (this rank's local
+    nodes, in the order of ``field_values("lam")``), SI: ``opening`` g, the
+    ``aperture`` (a deformable fracture), and with friction the ``slip``
+    (the tangential jump, a global vector), ``slip_magnitude``, the
+    ``shear_traction`` (tau as a global vector) and the Coulomb function
+    ``coulomb`` = |tau| - (c0 + mu_f lam) (0 where slipping, < 0 stuck);
+    ``weight``: each node's share of the fracture area on this rank (the
+    dual pairing's D_k); with friction, ``slipping_area`` (one entry: this
+    rank's fracture area at nodes with coulomb >= -1e-6 of the bound and a
+    slip, by the D_k of its own cells: a sum over ranks is the area)."""
+    from .fe import nodal_rule
+    from .kernels.friction import tangent_basis
+    from .model import Side, Trace
+    disc, model = problem.disc, problem.model
+    surf = disc.regions[Domain.FRACTURE]
+    xl, _ = problem.local_arrays(X or problem.X, t)
+    lam_dofs = disc.region_dofs(Domain.FRACTURE, "lam")
+    nc, nb, d = lam_dofs.shape[0], lam_dofs.shape[1], surf.dim
+    up, um = (xl[disc.region_dofs(Domain.FRACTURE, Trace("u", side))[:, :nb * d]].reshape(nc, nb, d)
+              for side in (Side.PLUS, Side.MINUS))
+    jump = (up - um) * problem.scales["u"].scale
+    lam = xl[lam_dofs] * problem.scales["lam"].scale
+    per_cell = {"opening": np.einsum("cka,ca->ck", jump, surf.normals)[..., None], "lam": lam[..., None]}
+    if model.has("tau"):
+        T = tangent_basis(surf.normals)                                         # (nc, d - 1, d)
+        tau = xl[disc.region_dofs(Domain.FRACTURE, "tau")].reshape(nc, nb, d - 1)
+        tau = tau * problem.scales["tau"].scale
+        per_cell["slip"] = np.einsum("cka,cia,cib->ckb", jump, T, T)
+        per_cell["shear_traction"] = np.einsum("cki,cia->cka", tau, T)
+    order = disc.field_local_dofs("lam")[:, 0]
+    slot = np.full(xl.size, -1)
+    slot[order] = np.arange(len(order))
+    idx = slot[lam_dofs.ravel()]
+    out = {}
+    for name, v in per_cell.items():
+        a = np.zeros((len(order), v.shape[-1]))
+        a[idx] = v.reshape(-1, v.shape[-1])
+        out[name] = a[:, 0] if a.shape[1] == 1 else a
+    weights = np.abs(surf.detJ)[:, None] * nodal_rule(surf.rdim, disc.field("lam").degree).weights[None, :]
+    out["weight"] = np.bincount(idx, weights=weights.ravel(), minlength=len(order))
+    if model.aperture is not None:
+        out["aperture"] = model.aperture.law.aperture(out["lam"], out["opening"])
+    if model.friction is not None:
+        fr = model.friction
+        out["slip_magnitude"] = np.linalg.norm(out["slip"], axis=1)
+        bound = fr.cohesion + fr.coefficient * out["lam"]
+        out["coulomb"] = np.linalg.norm(out["shear_traction"], axis=1) - bound
+        slipping = (out["coulomb"] >= -1e-6 * np.abs(bound)) & (out["slip_magnitude"] > 0) & (bound > 0)
+        out["slipping_area"] = np.array([float(np.sum(weights.ravel() * slipping[idx]))])
+    del out["lam"]
+    return out

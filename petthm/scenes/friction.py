@@ -36,6 +36,7 @@ from ..errors import InputError
 from ..fields import Domain, Side, Trace
 from ..kernels import poroelastic as pe
 from ..kernels.friction import tangent_basis
+from ..monitors import contact_node_fields
 from ..params import param
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions
 from .contact import contact_solver_defaults, fracture_normal, mechanics_model
@@ -76,6 +77,15 @@ def fracture_state(problem, X=None, t: float = 0.0, with_coordinates: bool = Fal
     return out
 
 
+def slip_columns(problem, X=None, t: float = 0.0) -> dict:
+    """History columns of a frictional fracture: the largest slip magnitude
+    and the slipping area (monitors.contact_node_fields)."""
+    comm = problem.dm.comm
+    f = contact_node_fields(problem, X, t)
+    return {"slip_max": probes.global_max(comm, f["slip_magnitude"], empty=0.0),
+            "slipping_area": probes.global_sum(comm, float(f["slipping_area"][0]))}
+
+
 class _FrictionPatchMonitor(Monitor):
     def __init__(self, scene):
         self.scene = scene
@@ -84,6 +94,7 @@ class _FrictionPatchMonitor(Monitor):
     def __call__(self, problem, t, X=None):
         sc, comm = self.scene, problem.dm.comm
         lam, tau, s = fracture_state(problem, X, t)
+        self.last = slip_columns(problem, X, t)
         tau_s, slip = sc.exact(t)
         bound = sc.bound()
         tau_ex = np.zeros(tau.shape[1])
@@ -96,7 +107,8 @@ class _FrictionPatchMonitor(Monitor):
                "slip_error": probes.global_max(comm, np.linalg.norm(s - s_ex, axis=1), empty=0.0),
                "tau_error": probes.global_max(comm, np.linalg.norm(tau - tau_ex, axis=1), empty=0.0) / bound,
                "lam_error": probes.global_max(comm, np.abs(lam - sc.sigma()), empty=0.0) / sc.sigma(),
-               "coulomb_max": probes.global_max(comm, mag - sc.local_bound(lam), empty=0.0) / bound}
+               "coulomb_max": probes.global_max(comm, mag - sc.local_bound(lam), empty=0.0) / bound,
+               **self.last}
         slipping = slip > 0
         out["law_error"] = probes.global_max(comm, np.abs(mag / sc.local_bound(lam) - 1.0),
                                              empty=0.0) if slipping else 0.0
@@ -120,7 +132,7 @@ class FrictionPatch(Scene):
                   mt.group("In-situ stress", ("insitu_stress",)), FrictionPatchParams)
     time = TimeDefaults(final_time=1.0, dt_initial=0.2, mesh_size=2.5)
     history_columns = ("slip_max", "slip_exact", "slip_error", "tau_error", "lam_error", "coulomb_max",
-                       "law_error")
+                       "law_error", "slipping_area")
 
     @property
     def H(self) -> float:
@@ -224,6 +236,7 @@ class _InclinedCrackMonitor(Monitor):
     def __call__(self, problem, t, X=None):
         sc, comm = self.scene, problem.dm.comm
         lam, tau, s, x = fracture_state(problem, X, t, with_coordinates=True)
+        shear = slip_columns(problem, X, t)
         xi = x @ sc.direction()                       # position along the crack from its centre
         slip = s[:, 0] * sc.slip_sign()
         exact = sc.exact_slip(xi)
@@ -237,7 +250,7 @@ class _InclinedCrackMonitor(Monitor):
                                                     empty=0.0) / sc.normal_stress(),
                      "law_error": probes.global_max(
                          comm, np.abs(np.linalg.norm(tau, axis=1) / sc.local_bound(lam) - 1.0)[inner],
-                         empty=0.0)}
+                         empty=0.0), **shear}
         rows = probes.gather_root(comm, np.column_stack([xi, slip, exact]))
         if rows is not None:
             order = np.argsort(rows[:, 0])
@@ -255,7 +268,8 @@ class InclinedCrack(Scene):
     description = "frictional crack inclined in uniaxial compression: slip against the mode II profile"
     parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT), InclinedCrackParams)
     time = TimeDefaults(final_time=1.0, dt_initial=1.0, mesh_size=0.0)
-    history_columns = ("slip_centre", "slip_centre_exact", "slip_l2_error", "lam_error", "law_error")
+    history_columns = ("slip_centre", "slip_centre_exact", "slip_l2_error", "lam_error", "law_error",
+                       "slip_max", "slipping_area")
 
     @property
     def a(self) -> float:

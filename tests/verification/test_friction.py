@@ -143,3 +143,26 @@ def test_inclined_crack_slip_converges_to_the_mode_ii_profile(tmp_path, petthm_r
         assert s["law_error"] <= 1e-8
     print("slip L2 errors", errors)
     assert errors[0] > errors[1] > errors[2] and errors[2] < 0.05
+
+
+def test_fracture_outputs_carry_slip_and_coulomb(tmp_path, petthm_run):
+    """fracture.xdmf/.h5 carry the opening, the slip vector and magnitude,
+    the shear traction and the Coulomb function (0 where slipping, < 0
+    stuck); history.csv the largest slip and the slipping area (the whole
+    100 m2 fracture once it slips)."""
+    import csv
+
+    import h5py
+    _, s = petthm_run("friction_patch", tmp_path, "-thm_friction_dim", 3, "-thm_fe_degree", 1)
+    with h5py.File(tmp_path / "fracture.h5") as f:
+        names = set(f["fields"])
+        last = str(len(f["fields/slip"]) - 1)
+        slip = f["fields/slip_magnitude/" + last][()]
+        coulomb = f["fields/coulomb/" + last][()]
+    assert {"opening", "slip", "slip_magnitude", "shear_traction", "coulomb", "tau", "lam"} <= names
+    assert np.allclose(slip, s["slip_exact_final"], rtol=1e-8)
+    assert np.abs(coulomb).max() <= 1e-8 * 0.6 * 60e6
+    h = list(csv.DictReader(open(tmp_path / "history.csv")))
+    assert float(h[-1]["slipping_area"]) == pytest.approx(100.0, rel=1e-12)
+    assert float(h[1]["slipping_area"]) == 0.0 and float(h[-1]["slip_max"]) == pytest.approx(
+        s["slip_exact_final"], rel=1e-8)
