@@ -19,6 +19,10 @@
   largest opening of a closed node, the second difference of lam away from
   the wells and the front, lam and the aperture at the injector, wall time.
   (The sneddon study runs both pairings too.)
+* ``inclined``: the frictional inclined crack (options/scenes/
+  inclined_crack.opts) on crack meshes a/10 ... a/80, P1 and P2: the
+  relative L2 error of the slip over |x| < 0.95 a and the slip at the
+  centre against the mode II profile, with each run's wall time.
 * ``mandel``: error against run time for Mandel's problem, u of degree 1
   and 2 (pm P1), three structured meshes: the largest nodal pressure error
   over c t/a^2 = 0.01 ... 1 and the error of the Mandel-Cryer peak, both
@@ -40,6 +44,7 @@ SNEDDON = {2: ["-thm_sneddon_dim", "2", "-thm_sneddon_radius", "50"], 3: []}
 SNEDDON_SIZES = {2: [0.1, 0.05, 0.025, 0.0125], 3: [0.2, 0.1, 0.05]}
 VI_SIZES = [0.05, 0.025, 0.0125]
 PAIRINGS = ["dual", "consistent"]
+INCLINED_SIZES = [0.1, 0.05, 0.025, 0.0125]
 PAIRING_MESHES = {40: 20, 20: 10}          # Scene 2 fracture size: well size (m)
 MANDEL_SIZES = [1.0, 0.5, 0.25]
 VI_METHODS = ["vinewtonrsls", "vinewtonssls"]
@@ -91,6 +96,23 @@ def pairing_study(out):
                              "aperture_injector_mm": 1e3 * float(h["aperture_injector"].astype(float)[-1])})
                 print("scene2", rows[-1], flush=True)
     write_csv(os.path.join(out, "pairing_scene2.csv"), rows)
+    return rows
+
+
+def inclined_study(out):
+    rows = []
+    for degree in (1, 2):
+        for h in INCLINED_SIZES:
+            d = os.path.join(out, "runs", f"inclined_P{degree}_h{h}")
+            s = run_petthm("inclined_crack", d, "-options_file",
+                           os.path.join(ROOT, "options", "scenes", "inclined_crack.opts"),
+                           "-thm_fe_degree", degree, "-thm_inclined_crack_size", h)
+            rows.append({"degree": degree, "crack_size_over_a": h, "dofs": sum(s["dofs"].values()),
+                         "wall_s": round(s["wall_time"]["total"], 2), "slip_l2_error": s["slip_l2_error"],
+                         "centre_error": abs(s["slip_centre"] / s["slip_centre_exact"] - 1.0),
+                         "lam_error": s["lam_error"], "law_error": s["law_error"]})
+            print("inclined", rows[-1], flush=True)
+    write_csv(os.path.join(out, "inclined.csv"), rows)
     return rows
 
 
@@ -192,8 +214,18 @@ def plot_sneddon(out, rows):
     fig.savefig(os.path.join(out, "sneddon_work_precision.png"), dpi=120)
 
 
-def markdown(out, sneddon_rows, vi_rows, mandel_rows=(), pairing_rows=()):
+def markdown(out, sneddon_rows, vi_rows, mandel_rows=(), pairing_rows=(), inclined_rows=()):
     lines = []
+    if inclined_rows:
+        lines += ["| inclined crack | P | h/a | dofs | wall (s) | slip L2 error | slip error at the centre "
+                  "| max abs(lam - sigma_n) / sigma_n | max abs(abs(tau) / (mu_f lam) - 1) |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for r in inclined_rows:
+            lines.append(
+                f"| | {r['degree']} | {r['crack_size_over_a']} | {r['dofs']} | {float(r['wall_s']):.2f} | "
+                f"{float(r['slip_l2_error']):.2e} | {float(r['centre_error']):.2e} | "
+                f"{float(r['lam_error']):.2e} | {float(r['law_error']):.1e} |")
+        lines.append("")
     if pairing_rows:
         lines += ["| Scene 2 to 1e7 s | P | fracture mesh (m) | dofs | wall (s) | aperture identity "
                   "| closed opening / a_ref | lam 2nd difference / lam0 | lam inj. (MPa) | a inj. (mm) |",
@@ -246,7 +278,7 @@ def markdown(out, sneddon_rows, vi_rows, mandel_rows=(), pairing_rows=()):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "contact"))
-    ap.add_argument("--study", default="sneddon,vi,mandel,pairing")
+    ap.add_argument("--study", default="sneddon,vi,mandel,pairing,inclined")
     ap.add_argument("--plot-only", action="store_true")
     a = ap.parse_args(argv)
     studies = a.study.split(",")
@@ -262,17 +294,21 @@ def main(argv=None):
             mandel_study(a.out)
         if "pairing" in studies:
             pairing_study(a.out)
+        if "inclined" in studies:
+            inclined_study(a.out)
     sn_rows = read_csv(sn) if os.path.exists(sn) else []
     vi_rows = read_csv(vi) if os.path.exists(vi) else []
     mn = os.path.join(a.out, "mandel.csv")
     mn_rows = read_csv(mn) if os.path.exists(mn) else []
     pr = os.path.join(a.out, "pairing_scene2.csv")
     pr_rows = read_csv(pr) if os.path.exists(pr) else []
+    ic = os.path.join(a.out, "inclined.csv")
+    ic_rows = read_csv(ic) if os.path.exists(ic) else []
     if sn_rows:
         plot_sneddon(a.out, sn_rows)
     if mn_rows:
         plot_mandel(a.out, mn_rows)
-    markdown(a.out, sn_rows, vi_rows, mn_rows, pr_rows)
+    markdown(a.out, sn_rows, vi_rows, mn_rows, pr_rows, ic_rows)
 
 
 if __name__ == "__main__":
