@@ -117,7 +117,7 @@ class ModelBuilder:
 
     # -- fracture mechanics ----------------------------------------------------------------
     def contact(self, *, normal_stress: float, u_scale: float, pressure: Optional[Callable] = None,
-                insitu_shear: tuple = ()) -> ct.FractureMechanics:
+                insitu_stress: Optional[np.ndarray] = None) -> ct.FractureMechanics:
         """lam >= 0 with the face loads pf + lam + sigma0_nn on u+-
         (kernels/contact.py); the fluid pressure is the field pf (when the
         model has fracture flow) or a prescribed ``pressure(x, t)``.
@@ -125,13 +125,15 @@ class ModelBuilder:
         ``u_scale``: the displacement scale (the VI's gap tolerance).  lam
         has the degree of u, paired in the dual basis
         (``-thm_contact_pairing dual``), or is P1 with the consistent
-        pairing (``consistent``).  ``insitu_shear``: sigma0 . n (a constant
-        vector) whose tangential part the friction carries in the in-situ
-        state (needs friction)."""
+        pairing (``consistent``).  ``insitu_stress``: the in-situ stress
+        tensor (tension positive) whose shear on each face the friction
+        carries in the in-situ state (needs friction); ``normal_stress`` is
+        then its compressive normal stress on the fracture."""
         dual = self.p.contact_pairing == "dual"
         self.mechanics = ct.FractureMechanics(self.dim, pf=None if pressure else "pf", pressure=pressure,
                                               insitu_normal_stress=-normal_stress,
-                                              insitu_shear=tuple(insitu_shear),
+                                              insitu_stress=() if insitu_stress is None else
+                                              tuple(np.ravel(insitu_stress)),
                                               gap_tolerance=GAP_TOLERANCE * u_scale,
                                               pairing=FRACTURE_DUAL if dual else FRACTURE)
         degree = self.model.fields[[f.name for f in self.model.fields].index("u")].degree if dual else 1

@@ -85,12 +85,13 @@ BLOCK_RECIPE = {
 
 
 def solver_defaults_by_size(scene_defaults: dict[str, str], has_displacement: bool, unknowns: int,
-                            direct_max: int) -> dict[str, str]:
+                            direct_max: int, has_friction: bool = False) -> dict[str, str]:
     """The scene's solver defaults, with the block preconditioner in place of
     its linear solver when the problem has displacement and more than
     ``direct_max`` unknowns (-thm_direct_max_unknowns): a direct solve's
-    memory and time grow faster than the problem."""
-    if not has_displacement or unknowns <= direct_max:
+    memory and time grow faster than the problem.  Not with friction: the
+    block recipe has no place for the tangential traction yet."""
+    if not has_displacement or unknowns <= direct_max or has_friction:
         return scene_defaults
     return dict(scene_defaults, **BLOCK_RECIPE)
 

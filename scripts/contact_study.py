@@ -44,7 +44,7 @@ SNEDDON = {2: ["-thm_sneddon_dim", "2", "-thm_sneddon_radius", "50"], 3: []}
 SNEDDON_SIZES = {2: [0.1, 0.05, 0.025, 0.0125], 3: [0.2, 0.1, 0.05]}
 VI_SIZES = [0.05, 0.025, 0.0125]
 PAIRINGS = ["dual", "consistent"]
-INCLINED_SIZES = [0.1, 0.05, 0.025, 0.0125]
+INCLINED_SIZES = {2: [0.1, 0.05, 0.025, 0.0125], 3: [0.2, 0.1, 0.05]}
 PAIRING_MESHES = {40: 20, 20: 10}          # Scene 2 fracture size: well size (m)
 MANDEL_SIZES = [1.0, 0.5, 0.25]
 VI_METHODS = ["vinewtonrsls", "vinewtonssls"]
@@ -101,13 +101,14 @@ def pairing_study(out):
 
 def inclined_study(out):
     rows = []
-    for degree in (1, 2):
-        for h in INCLINED_SIZES:
-            d = os.path.join(out, "runs", f"inclined_P{degree}_h{h}")
+    for dim, degree in ((2, 1), (2, 2), (3, 2)):
+        for h in INCLINED_SIZES[dim]:
+            d = os.path.join(out, "runs", f"inclined{dim}d_P{degree}_h{h}")
             s = run_petthm("inclined_crack", d, "-options_file",
                            os.path.join(ROOT, "options", "scenes", "inclined_crack.opts"),
-                           "-thm_fe_degree", degree, "-thm_inclined_crack_size", h)
-            rows.append({"degree": degree, "crack_size_over_a": h, "dofs": sum(s["dofs"].values()),
+                           "-thm_inclined_dim", dim, "-thm_fe_degree", degree, "-thm_inclined_crack_size", h)
+            rows.append({"dim": dim, "degree": degree, "crack_size_over_a": h,
+                         "dofs": sum(s["dofs"].values()),
                          "wall_s": round(s["wall_time"]["total"], 2), "slip_l2_error": s["slip_l2_error"],
                          "centre_error": abs(s["slip_centre"] / s["slip_centre_exact"] - 1.0),
                          "lam_error": s["lam_error"], "law_error": s["law_error"]})
@@ -222,7 +223,8 @@ def markdown(out, sneddon_rows, vi_rows, mandel_rows=(), pairing_rows=(), inclin
                   "|---|---|---|---|---|---|---|---|---|"]
         for r in inclined_rows:
             lines.append(
-                f"| | {r['degree']} | {r['crack_size_over_a']} | {r['dofs']} | {float(r['wall_s']):.2f} | "
+                f"| {r.get('dim', 2)}D | {r['degree']} | {r['crack_size_over_a']} | {r['dofs']} | "
+                f"{float(r['wall_s']):.2f} | "
                 f"{float(r['slip_l2_error']):.2e} | {float(r['centre_error']):.2e} | "
                 f"{float(r['lam_error']):.2e} | {float(r['law_error']):.1e} |")
         lines.append("")

@@ -54,8 +54,8 @@ class FractureMechanics:
     pf: Optional[str] = None                   # fracture pressure field, or
     pressure: Optional[Callable] = None        # a prescribed pf(x, t) (SI), x (nc, nq, d)
     insitu_normal_stress: float = 0.0          # sigma0_nn, tension positive
-    insitu_shear: tuple = ()                   # sigma0 . n (global, constant), its tangential part is
-                                               # carried by the friction traction tau in the in-situ state
+    insitu_stress: tuple = ()                  # sigma0 (d x d, row by row, tension positive): its shear
+                                               # on each face, carried by tau in the in-situ state
     gap_tolerance: float = 0.0                 # m, see ``_gap_f0``
     region: Region = FRACTURE
     pairing: Region = FRACTURE_DUAL            # where lam meets u (FRACTURE: the consistent pairing)
@@ -107,9 +107,10 @@ def _face_load(fm: FractureMechanics, sign: float, ctx):
     the plane, which the friction traction tau = -sigma0_t carries in the
     in-situ state (kernels/friction.py)."""
     load = fluid_load(fm, ctx)[..., None] * ctx.normals
-    if len(fm.insitu_shear):
-        s = np.asarray(fm.insitu_shear, dtype=float)
-        load = load + (s - np.einsum("cqa,a->cq", ctx.normals, s)[..., None] * ctx.normals)
+    if len(fm.insitu_stress):
+        n = ctx.normals
+        t = np.einsum("ab,cqb->cqa", np.reshape(fm.insitu_stress, (fm.dim, fm.dim)), n)
+        load = load + (t - np.einsum("cqa,cqa->cq", t, n)[..., None] * n)
     return -sign * load
 
 

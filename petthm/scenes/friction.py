@@ -20,7 +20,10 @@
   with the elliptical profile of a shear (mode II) Griffith crack,
   |s(x)| = 4 (1 - nu^2) dtau / E sqrt(a^2 - x^2) (x along the crack from its
   centre; e.g. the "single fracture under shear compression" validation of
-  GEOS), lam = sigma_n and |tau| = c0 + mu_f sigma_n.
+  GEOS), lam = sigma_n and |tau| = c0 + mu_f sigma_n.  -thm_inclined_dim 3:
+  a penny crack of radius a dipping by psi about x in a compression along z
+  (half model x >= 0): |s(r)| = 16 (1 - nu^2) dtau / (pi (2 - nu) E)
+  sqrt(a^2 - r^2), along the in-situ shear.
 """
 from __future__ import annotations
 
@@ -51,11 +54,10 @@ class FrictionPatchParams:
                                         "> 1 slip", lo=0.0)
 
 
-def fracture_state(problem, X=None, t: float = 0.0, with_coordinates: bool = False):
+def fracture_state(problem, X=None, t: float = 0.0):
     """At the fracture's lam nodes on this rank (each node once): lam (n,),
     tau (n, d - 1) and the tangential jump s (n, d - 1), in the tangent basis
-    of each face (kernels/friction.tangent_basis); and the nodes'
-    coordinates (n, d) ``with_coordinates``."""
+    of each face (kernels/friction.tangent_basis)."""
     disc = problem.disc
     surf = disc.regions[Domain.FRACTURE]
     xl, _ = problem.local_arrays(X or problem.X, t)
@@ -67,14 +69,8 @@ def fracture_state(problem, X=None, t: float = 0.0, with_coordinates: bool = Fal
               for side in (Side.PLUS, Side.MINUS))
     T = tangent_basis(surf.normals)                                             # (nc, d - 1, d)
     s = np.einsum("cka,cia->cki", up - um, T) * problem.scales["u"].scale
-    local, first = np.unique(lam_dofs.ravel(), return_index=True)
-    out = (lam.ravel()[first], tau.reshape(-1, d - 1)[first], s.reshape(-1, d - 1)[first])
-    if with_coordinates:
-        coords = disc.field_node_coordinates("lam")
-        order = np.argsort(disc.field_local_dofs("lam").ravel())
-        pos = np.searchsorted(disc.field_local_dofs("lam").ravel()[order], local)
-        out = out + (coords[order][pos],)
-    return out
+    _, first = np.unique(lam_dofs.ravel(), return_index=True)
+    return lam.ravel()[first], tau.reshape(-1, d - 1)[first], s.reshape(-1, d - 1)[first]
 
 
 def slip_columns(problem, X=None, t: float = 0.0) -> dict:
@@ -219,42 +215,53 @@ class FrictionPatch(Scene):
 @dataclass(frozen=True)
 class InclinedCrackParams:
     """Frictional crack inclined in a uniaxial compression (inclined_crack)"""
-    inclined_half_length: float = param(1.0, "m", "crack half-length a", lo=0.0, lo_open=True)
-    inclined_angle: float = param(45.0, "deg", "crack angle psi to the x axis (the load is along y)",
-                                  lo=0.0, hi=90.0, lo_open=True)
-    inclined_compression: float = param(10e6, "Pa", "uniaxial compression sigma along y", lo=0.0,
+    inclined_dim: int = param(2, "-", "2: plane-strain crack; 3: penny crack (half model x >= 0)",
+                              choices=(2, 3))
+    inclined_half_length: float = param(1.0, "m", "crack half-length (2D) or radius (3D) a", lo=0.0,
                                         lo_open=True)
+    inclined_angle: float = param(45.0, "deg", "angle psi of the crack to the plane normal to the load",
+                                  lo=0.0, hi=90.0, lo_open=True)
+    inclined_compression: float = param(10e6, "Pa", "uniaxial compression sigma along the last axis",
+                                        lo=0.0, lo_open=True)
     inclined_box: float = param(20.0, "-", "domain half-size L / a", lo=2.0)
     inclined_crack_size: float = param(0.05, "-", "mesh size on the crack / a", lo=1e-4, hi=1.0)
 
 
 class _InclinedCrackMonitor(Monitor):
+    """Slip along the in-situ shear's direction against the exact profile,
+    at the traction's nodes (monitors.contact_node_fields)."""
+
     def __init__(self, scene):
         self.scene = scene
         self.last, self.profile = {}, {}
 
     def __call__(self, problem, t, X=None):
         sc, comm = self.scene, problem.dm.comm
-        lam, tau, s, x = fracture_state(problem, X, t, with_coordinates=True)
-        shear = slip_columns(problem, X, t)
-        xi = x @ sc.direction()                       # position along the crack from its centre
-        slip = s[:, 0] * sc.slip_sign()
-        exact = sc.exact_slip(xi)
-        inner = np.abs(xi) < 0.95 * sc.a
+        f = contact_node_fields(problem, X, t)
+        x = problem.disc.field_node_coordinates("lam")
+        lam = problem.field_values("lam", X, t)[:, 0]
+        n = sc.normal()
+        r = np.linalg.norm(x - np.outer(x @ n, n), axis=1)          # distance from the centre, in the plane
+        shear = sc.shear()
+        slip = f["slip"] @ (shear / np.linalg.norm(shear))            # along the in-situ shear
+        exact = sc.exact_slip(r)
+        inner = r < 0.95 * sc.a
         num = probes.global_sum(comm, float(np.sum((slip - exact)[inner] ** 2)))
         den = probes.global_sum(comm, float(np.sum(exact[inner] ** 2)))
-        centre = probes.global_max(comm, slip[np.abs(xi) < 1e-9 * sc.a], empty=-np.inf)
-        self.last = {"slip_centre": centre, "slip_centre_exact": sc.exact_slip(np.zeros(1))[0],
+        tau = np.linalg.norm(f["shear_traction"], axis=1)
+        centre, centre_exact = probes.nearest(comm, x, np.zeros(x.shape[1]), (slip, exact))
+        self.last = {"slip_centre": centre, "slip_centre_exact": centre_exact,    # nearest the centre
                      "slip_l2_error": float(np.sqrt(num / den)) if den > 0 else 0.0,
                      "lam_error": probes.global_max(comm, np.abs(lam - sc.normal_stress())[inner],
                                                     empty=0.0) / sc.normal_stress(),
-                     "law_error": probes.global_max(
-                         comm, np.abs(np.linalg.norm(tau, axis=1) / sc.local_bound(lam) - 1.0)[inner],
-                         empty=0.0), **shear}
-        rows = probes.gather_root(comm, np.column_stack([xi, slip, exact]))
+                     "law_error": probes.global_max(comm, np.abs(tau / sc.local_bound(lam) - 1.0)[inner],
+                                                    empty=0.0),
+                     "slip_max": probes.global_max(comm, f["slip_magnitude"], empty=0.0),
+                     "slipping_area": probes.global_sum(comm, float(f["slipping_area"][0]))}
+        rows = probes.gather_root(comm, np.column_stack([r, slip, exact]))
         if rows is not None:
             order = np.argsort(rows[:, 0])
-            self.profile = {"x": rows[order, 0].tolist(), "slip": rows[order, 1].tolist(),
+            self.profile = {"r": rows[order, 0].tolist(), "slip": rows[order, 1].tolist(),
                             "exact": rows[order, 2].tolist()}
         return self.last
 
@@ -275,20 +282,32 @@ class InclinedCrack(Scene):
     def a(self) -> float:
         return self.p.inclined_half_length
 
-    def direction(self) -> np.ndarray:
-        psi = np.radians(self.p.inclined_angle)
-        return np.array([np.cos(psi), np.sin(psi)])
+    @property
+    def dim(self) -> int:
+        return self.p.inclined_dim
 
     def normal(self) -> np.ndarray:
+        """The crack's unit normal: e_y (2D) or e_z (3D) turned by psi about the z (2D) or x (3D) axis."""
         psi = np.radians(self.p.inclined_angle)
-        return np.array([-np.sin(psi), np.cos(psi)])
+        if self.dim == 2:
+            return np.array([-np.sin(psi), np.cos(psi)])
+        return np.array([0.0, -np.sin(psi), np.cos(psi)])
 
-    def traction(self) -> np.ndarray:
-        """sigma0 . n of the in-situ uniaxial compression (tension positive)."""
-        return np.array([0.0, -self.p.inclined_compression * self.normal()[1]])
+    def stress(self) -> np.ndarray:
+        """The in-situ uniaxial compression along the last axis (tension positive)."""
+        S = np.zeros((self.dim, self.dim))
+        S[-1, -1] = -self.p.inclined_compression
+        return S
 
     def normal_stress(self) -> float:
-        return -float(self.traction() @ self.normal())
+        n = self.normal()
+        return -float(n @ self.stress() @ n)
+
+    def shear(self) -> np.ndarray:
+        """The in-situ shear traction on the plane, (I - n n) sigma0 n."""
+        n = self.normal()
+        t = self.stress() @ n
+        return t - (t @ n) * n
 
     def bound(self) -> float:
         return self.local_bound(self.normal_stress())
@@ -298,53 +317,65 @@ class InclinedCrack(Scene):
         return self.p.fracture_cohesion + self.p.fracture_friction * lam
 
     def driving_stress(self) -> float:
-        shear = self.traction() - (self.traction() @ self.normal()) * self.normal()
-        return max(float(np.linalg.norm(shear)) - self.bound(), 0.0)
+        return max(float(np.linalg.norm(self.shear())) - self.bound(), 0.0)
 
-    def slip_sign(self) -> float:
-        """The + face slides along sigma0_t (the in-situ shear that tau can no
-        longer carry pushes it): +1 where that is along the tangent t of the face."""
-        from ..kernels.friction import tangent_basis
-        shear = self.traction() - (self.traction() @ self.normal()) * self.normal()
-        t = tangent_basis(self.normal()[None, :])[0, 0]
-        return float(np.sign(shear @ t)) or 1.0
-
-    def exact_slip(self, xi):
+    def exact_slip(self, r):
+        """The slip along the in-situ shear: the + face slides along it.  2D
+        (mode II Griffith): 4 (1 - nu^2) dtau / E sqrt(a^2 - r^2); 3D (penny
+        crack in uniform shear): 16 (1 - nu^2) dtau / (pi (2 - nu) E) sqrt(a^2 - r^2)."""
         p = self.p
         E, nu = p.rock_youngs_modulus, p.rock_poisson_ratio
-        return 4 * (1 - nu ** 2) / E * self.driving_stress() * np.sqrt(np.maximum(self.a ** 2 - xi ** 2, 0.0))
+        c = 4 * (1 - nu ** 2) / E if self.dim == 2 else 16 * (1 - nu ** 2) / (np.pi * (2 - nu) * E)
+        return c * self.driving_stress() * np.sqrt(np.maximum(self.a ** 2 - r ** 2, 0.0))
 
     def boundaries(self):
         L = self.p.inclined_box * self.a
-        return {"far": lambda x: np.isclose(np.abs(x[:, 0]), L) | np.isclose(np.abs(x[:, 1]), L)}
+        if self.dim == 2:
+            return {"far": lambda x: np.isclose(np.abs(x[:, 0]), L) | np.isclose(np.abs(x[:, 1]), L)}
+        return {"sym_x": lambda x: np.isclose(x[:, 0], 0.0),
+                "far": lambda x: np.isclose(x[:, 0], L) | np.isclose(np.abs(x[:, 1]), L)
+                | np.isclose(np.abs(x[:, 2]), L)}
 
     def generate_mesh(self, path, size):
         p, a = self.p, self.a
         L = p.inclined_box * a
         h = p.inclined_crack_size * a
-        e = a * self.direction()
-        fr = [meshing.Fracture("segment", p0=tuple(-e), p1=tuple(e), size=h)]
-        return meshing.box_with_fractures(path, [2 * L, 2 * L], size or L / 10, fr,
-                                          grading_distance=3 * (size or L / 10), origin=(-L, -L))
+        size = size or L / 10
+        if self.dim == 2:
+            psi = np.radians(p.inclined_angle)
+            e = a * np.array([np.cos(psi), np.sin(psi)])
+            fr = [meshing.Fracture("segment", p0=tuple(-e), p1=tuple(e), size=h)]
+            return meshing.box_with_fractures(path, [2 * L, 2 * L], size, fr, grading_distance=3 * size,
+                                              origin=(-L, -L))
+        fr = [meshing.Fracture("disc", center=(0.0, 0.0, 0.0), radius=a, size=h, dip=p.inclined_angle,
+                               strike=0)]
+        return meshing.box_with_fractures(path, [L, 2 * L, 2 * L], size, fr, grading_distance=3 * size,
+                                          origin=(0.0, -L, -L))
 
     def build(self, mesh, degree):
         from ..builders import ModelBuilder
-        p = self.p
-        if mesh.dim != 2:
-            raise InputError("inclined_crack is a 2D scene: the mesh is 3D")
+        p, d = self.p, self.dim
+        if mesh.dim != d:
+            raise InputError(f"option -thm_inclined_dim = {d} but the mesh is {mesh.dim}D")
         if not self.bound() > 0:
             raise InputError("inclined_crack needs friction: -thm_fracture_friction > 0 or "
                              "-thm_fracture_cohesion > 0 (a frictionless crack cannot carry the in-situ "
                              "shear)")
+        normals = mesh.fracture.normals if mesh.fracture is not None and len(mesh.fracture.normals) else None
+        if normals is not None and not np.allclose(np.abs(normals @ self.normal()), 1.0, atol=1e-6):
+            raise InputError("inclined_crack: the mesh's fracture is not the plane of -thm_inclined_angle")
         sn = self.normal_stress()
         w_ref = max(float(self.exact_slip(np.zeros(1))[0]), 1e-6 * self.a * sn / p.rock_youngs_modulus)
-        b = ModelBuilder(p, 2)
+        b = ModelBuilder(p, d)
         b.elasticity(degree)
-        b.contact(normal_stress=sn, u_scale=w_ref, pressure=lambda x, t: 0.0,
-                  insitu_shear=tuple(self.traction()))
+        b.contact(normal_stress=sn, u_scale=w_ref, pressure=lambda x, t: 0.0, insitu_stress=self.stress())
         model = b.build()
-        bcs = [Dirichlet("u", "far", lambda x, t: np.zeros((len(x), 2)))] + \
-            tip_tractions(model, lambda x, t: np.full(len(x), sn))
+        bcs = [Dirichlet("u", "far", lambda x, t: np.zeros((len(x), d)))]
+        symmetry = None
+        if d == 3:       # symmetry: no x-displacement, no shear along the tangent that is e_x
+            bcs.append(Dirichlet("u", "sym_x", lambda x, t: np.zeros(len(x)), components=(0,)))
+            symmetry = {"sym_x": int(np.argmax(np.abs(tangent_basis(self.normal()[None, :])[0][:, 0])))}
+        bcs += tip_tractions(model, lambda x, t: np.full(len(x), sn), symmetry)
         scales = {"u": FieldScale(w_ref), "lam": FieldScale(sn)}
         return Setup(model, bcs, scales, {"lam": constant(sn)}, _InclinedCrackMonitor(self))
 

@@ -166,3 +166,19 @@ def test_fracture_outputs_carry_slip_and_coulomb(tmp_path, petthm_run):
     assert float(h[-1]["slipping_area"]) == pytest.approx(100.0, rel=1e-12)
     assert float(h[1]["slipping_area"]) == 0.0 and float(h[-1]["slip_max"]) == pytest.approx(
         s["slip_exact_final"], rel=1e-8)
+
+
+@pytest.mark.slow
+def test_inclined_penny_crack_slip_converges(tmp_path, petthm_run):
+    """The 3D counterpart (a penny crack dipping 45 degrees, half model, P2)
+    on crack meshes a/5, a/10, a/20: the relative L2 error of the slip along
+    the in-situ shear falls with every refinement and is below 5 % on the
+    finest (measured 10.1, 4.7, 2.2 %; 31, 44, 101 s)."""
+    errors = []
+    for h in (0.2, 0.1, 0.05):
+        _, s = petthm_run("inclined_crack", tmp_path / str(h), "-thm_inclined_dim", 3,
+                          "-thm_inclined_crack_size", h, timeout=1800)
+        assert s["status"] == "completed" and s["law_error"] <= 1e-8
+        errors.append(s["slip_l2_error"])
+    print("penny slip L2 errors", errors)
+    assert errors[0] > errors[1] > errors[2] and errors[2] < 0.05
