@@ -30,6 +30,7 @@ from ..constraints import Dirichlet
 from ..errors import InputError
 from ..fields import Domain
 from ..monitors import FractureWells, contact_node_checks, fracture_vertices
+from .friction import slip_columns
 from ..params import CELSIUS, param
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
@@ -88,6 +89,8 @@ class _Scene2Monitor(Monitor):
         out["nodes_open"] = probes.global_count(comm, ~closed)
         opening, second = contact_node_checks(problem, OPEN_TRACTION * sc.lam0, X, t)
         out["closed_opening"] = probes.global_max(comm, [opening]) / sc.reference_aperture()
+        out.update(slip_columns(problem, X, t) if problem.model.friction is not None else
+                   {"slip_max": np.nan, "slipping_area": np.nan})
         out["lam_roughness"] = np.nan if second is None else \
             probes.global_max(comm, second[self.regular_cells(problem)], empty=0.0) / sc.lam0
         self.base.worst.update("aperture_identity", out["aperture_identity"])
@@ -152,7 +155,7 @@ class PennyImpermeable(Scene):
                         output_interval=10)
     history_columns = ("injection_pressure", "production_temperature", "production_rate", "lam_injector",
                        "aperture_injector", "aperture_max", "lam_min", "nodes_open", "aperture_identity",
-                       "closed_opening", "lam_roughness",
+                       "closed_opening", "lam_roughness", "slip_max", "slipping_area",
                        "Tf_min", "Tf_max", "mass_balance", "energy_balance")
     def solver_defaults(self, comm):
         # one LU per time step: the later Newton iterations of a step reuse it
