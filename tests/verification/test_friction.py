@@ -182,3 +182,12 @@ def test_inclined_penny_crack_slip_converges(tmp_path, petthm_run):
         errors.append(s["slip_l2_error"])
     print("penny slip L2 errors", errors)
     assert errors[0] > errors[1] > errors[2] and errors[2] < 0.05
+
+
+def test_inclined_crack_two_ranks_equal_serial(tmp_path, petthm_run):
+    """2D, a/20, on 2 ranks: the serial slip error, centre slip and
+    slipping area (each node counted once over the ranks)."""
+    _, s1 = petthm_run("inclined_crack", tmp_path / "np1")
+    _, s2 = petthm_run("inclined_crack", tmp_path / "np2", ranks=2)
+    for k in ("slip_l2_error", "slip_centre", "slipping_area"):
+        assert s2[k] == pytest.approx(s1[k], rel=1e-9), k
