@@ -23,6 +23,10 @@
   inclined_crack.opts) on crack meshes a/10 ... a/80, P1 and P2: the
   relative L2 error of the slip over |x| < 0.95 a and the slip at the
   centre against the mode II profile, with each run's wall time.
+* ``--compare-lam COARSE FINE``: two Scene 2 runs' nodal lam at their
+  common output times (fracture.h5), the coarse one against the fine one
+  interpolated (a smooth reference for the coarse run's nodal values), over
+  the nodes more than 40 m from the wells and inside r < 90 m.
 * ``mandel``: error against run time for Mandel's problem, u of degree 1
   and 2 (pm P1), three structured meshes: the largest nodal pressure error
   over c t/a^2 = 0.01 ... 1 and the error of the Mandel-Cryer peak, both
@@ -188,6 +192,33 @@ def _vi_run(out, solver, sopts, h, method, profiles):
             "nodes_open": s["nodes_open"]}
 
 
+def compare_lam(coarse: str, fine: str, lam0: float = 40e6):
+    """max and mean |lam_coarse - lam_fine| / lam0 at the common output times (see the docstring)."""
+    import re
+
+    import h5py
+    from scipy.interpolate import LinearNDInterpolator
+
+    def times(d):
+        text = open(os.path.join(d, "fracture.xdmf")).read()
+        return [float(t) for t in re.findall(r'<Time Value="([^"]+)"', text)]
+    with h5py.File(os.path.join(coarse, "fracture.h5")) as f, \
+            h5py.File(os.path.join(fine, "fracture.h5")) as g:
+        xc, xf = f["mesh/geometry"][()][:, :2], g["mesh/geometry"][()][:, :2]
+        wells = np.array([[-50.0, 0.0], [50.0, 0.0]])
+        sel = (np.min(np.linalg.norm(xc[:, None, :] - wells[None], axis=2), axis=1) > 40.0) & \
+            (np.linalg.norm(xc, axis=1) < 90.0)
+        tf = times(fine)
+        for k, t in enumerate(times(coarse)):
+            if t not in tf:
+                continue
+            lc, lf = f[f"fields/lam/{k}"][()], g[f"fields/lam/{tf.index(t)}"][()]
+            ref = LinearNDInterpolator(xf, lf)(xc)
+            ok = sel & np.isfinite(ref)
+            d = np.abs(lc - ref)[ok] / lam0
+            print(f"t = {t:.3g} s: {ok.sum()} nodes, max {d.max():.4f}, mean {d.mean():.4f} of lam0")
+
+
 def read_csv(path):
     return list(csv.DictReader(open(path)))
 
@@ -282,7 +313,10 @@ def main(argv=None):
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "contact"))
     ap.add_argument("--study", default="sneddon,vi,mandel,pairing,inclined")
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--compare-lam", nargs=2, metavar=("COARSE", "FINE"))
     a = ap.parse_args(argv)
+    if a.compare_lam:
+        return compare_lam(*a.compare_lam)
     studies = a.study.split(",")
     os.makedirs(a.out, exist_ok=True)
     sn = os.path.join(a.out, "sneddon.csv")
