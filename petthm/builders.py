@@ -136,7 +136,7 @@ class ModelBuilder:
                                               tuple(np.ravel(insitu_stress)),
                                               gap_tolerance=GAP_TOLERANCE * u_scale,
                                               pairing=FRACTURE_DUAL if dual else FRACTURE)
-        degree = self.model.fields[[f.name for f in self.model.fields].index("u")].degree if dual else 1
+        degree = self.model.spec("u").degree if dual else 1
         self.model.add_field(FieldSpec("lam", 1, degree, Domain.FRACTURE))
         self.model.add(ct.fracture_mechanics_terms(self.mechanics))
         self.model.bounds["lam"] = (0.0, None)

@@ -129,6 +129,10 @@ class Model:
     def has(self, name: str) -> bool:
         return any(f.name == name for f in self.fields)
 
+    def spec(self, name: str) -> FieldSpec:
+        """The FieldSpec of an active field."""
+        return next(f for f in self.fields if f.name == name)
+
     def add_field(self, spec: FieldSpec) -> None:
         if self.has(spec.name):
             raise ValueError(f"field {spec.name} is already in the model")

@@ -201,6 +201,19 @@ def fracture_vertices(problem, X=None, t: float = 0.0):
     return x, g.ravel()[first], lam.ravel()[first]
 
 
+def _contact_nodes(problem, X=None, t: float = 0.0):
+    """Per fracture cell and lam node (SI): the lam dofs (nc, nb), lam
+    (nc, nb) and the jump u+ - u- (nc, nb, d), and the local array."""
+    from .model import Side, Trace
+    disc = problem.disc
+    xl, _ = problem.local_arrays(X or problem.X, t)
+    lam_dofs = disc.region_dofs(Domain.FRACTURE, "lam")
+    nc, nb, d = lam_dofs.shape[0], lam_dofs.shape[1], disc.regions[Domain.FRACTURE].dim
+    up, um = (xl[disc.region_dofs(Domain.FRACTURE, Trace("u", side))[:, :nb * d]].reshape(nc, nb, d)
+              for side in (Side.PLUS, Side.MINUS))
+    return lam_dofs, xl[lam_dofs] * problem.scales["lam"].scale, (up - um) * problem.scales["u"].scale, xl
+
+
 def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0):
     """(largest |g| over closed lam nodes on this rank, and per fracture cell
     the largest |lam_mid - (lam_a + lam_b)/2| over its edges with both ends
@@ -210,16 +223,10 @@ def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0)
     it is O(h) or larger).  A node is closed where lam > ``closed_traction``;
     the second differences are None for P1 lam (no edge nodes)."""
     from .fe import EDGES
-    from .model import Side, Trace
-    disc = problem.disc
-    surf = disc.regions[Domain.FRACTURE]
-    xl, _ = problem.local_arrays(X or problem.X, t)
-    nc, d, r = surf.ncells, surf.dim, surf.rdim
-    lam = xl[disc.region_dofs(Domain.FRACTURE, "lam")] * problem.scales["lam"].scale       # (nc, nb)
-    nb = lam.shape[1]
-    jump = [xl[disc.region_dofs(Domain.FRACTURE, Trace("u", s))[:, :nb * d]].reshape(nc, nb, d) for s in
-            (Side.PLUS, Side.MINUS)]
-    g = np.einsum("cka,ca->ck", jump[0] - jump[1], surf.normals) * problem.scales["u"].scale
+    surf = problem.disc.regions[Domain.FRACTURE]
+    _, lam, jump, _ = _contact_nodes(problem, X, t)
+    nb, r = lam.shape[1], surf.rdim
+    g = np.einsum("cka,ca->ck", jump, surf.normals)
     closed = lam > closed_traction
     opening = float(np.max(np.abs(g[closed]), initial=0.0))
     if nb == r + 1:
@@ -242,16 +249,10 @@ def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray
     slip, by the D_k of its own cells: a sum over ranks is the area)."""
     from .fe import nodal_rule
     from .kernels.friction import tangent_basis
-    from .model import Side, Trace
     disc, model = problem.disc, problem.model
     surf = disc.regions[Domain.FRACTURE]
-    xl, _ = problem.local_arrays(X or problem.X, t)
-    lam_dofs = disc.region_dofs(Domain.FRACTURE, "lam")
+    lam_dofs, lam, jump, xl = _contact_nodes(problem, X, t)
     nc, nb, d = lam_dofs.shape[0], lam_dofs.shape[1], surf.dim
-    up, um = (xl[disc.region_dofs(Domain.FRACTURE, Trace("u", side))[:, :nb * d]].reshape(nc, nb, d)
-              for side in (Side.PLUS, Side.MINUS))
-    jump = (up - um) * problem.scales["u"].scale
-    lam = xl[lam_dofs] * problem.scales["lam"].scale
     per_cell = {"opening": np.einsum("cka,ca->ck", jump, surf.normals)[..., None], "lam": lam[..., None]}
     if model.has("tau"):
         T = tangent_basis(surf.normals)                                         # (nc, d - 1, d)
@@ -275,7 +276,7 @@ def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray
     if model.friction is not None:
         fr = model.friction
         out["slip_magnitude"] = np.linalg.norm(out["slip"], axis=1)
-        bound = fr.cohesion + fr.coefficient * out["lam"]
+        bound = fr.bound(out["lam"])
         out["coulomb"] = np.linalg.norm(out["shear_traction"], axis=1) - bound
         slipping = (out["coulomb"] >= -1e-6 * np.abs(bound)) & (out["slip_magnitude"] > 0) & (bound > 0)
         out["slipping_area"] = np.array([float(np.sum(weights.ravel() * slipping[idx]))])

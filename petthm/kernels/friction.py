@@ -49,6 +49,10 @@ class Friction:
     youngs_modulus: float = 1.0        # E of the rock (Pa): c = E / h
     tau: str = "tau"
 
+    def bound(self, lam):
+        """c0 + mu_f lam: the Coulomb bound of |tau| (before the cut at 0)."""
+        return self.cohesion + self.coefficient * lam
+
 
 def tangent_basis(normals: np.ndarray) -> np.ndarray:
     """Unit tangents t_i (..., d - 1, d) of unit normals n (..., d): in 2D
@@ -111,7 +115,7 @@ def _law_state(fr: Friction, ctx) -> _LawState:
     lam = ctx.value(fr.mech.lam)[..., 0]
     c = fr.youngs_modulus / ctx.h[:, :, None]                                   # (nc, 1, 1)
     z = tau - c * slip_increment(fr, ctx)
-    bound = fr.coefficient * lam + fr.cohesion
+    bound = fr.bound(lam)
     b = np.maximum(bound, 0.0)
     norm = np.linalg.norm(z, axis=-1)
     slip = norm > b

@@ -74,7 +74,7 @@ def tip_tractions(model: Model, lam: Callable, symmetry: dict | None = None) -> 
     it vanishes by symmetry (tau_i = 0)."""
     out = [Dirichlet("lam", TIP_BC, lam)]
     if model.has("tau"):
-        m = model.fields[[f.name for f in model.fields].index("tau")].ncomp
+        m = model.spec("tau").ncomp
         out.append(Dirichlet("tau", TIP_BC, lambda x, t: np.zeros((len(x), m))))
         out += [Dirichlet("tau", b, lambda x, t: np.zeros(len(x)), components=(i,))
                 for b, i in (symmetry or {}).items()]

@@ -36,7 +36,6 @@ from .. import meshing, probes
 from ..assembly import FieldScale
 from ..constraints import Dirichlet
 from ..errors import InputError
-from ..fields import Domain, Side, Trace
 from ..kernels import poroelastic as pe
 from ..kernels.friction import tangent_basis
 from ..monitors import contact_node_fields
@@ -54,32 +53,27 @@ class FrictionPatchParams:
                                         "> 1 slip", lo=0.0)
 
 
-def fracture_state(problem, X=None, t: float = 0.0):
-    """At the fracture's lam nodes on this rank (each node once): lam (n,),
-    tau (n, d - 1) and the tangential jump s (n, d - 1), in the tangent basis
-    of each face (kernels/friction.tangent_basis)."""
-    disc = problem.disc
-    surf = disc.regions[Domain.FRACTURE]
-    xl, _ = problem.local_arrays(X or problem.X, t)
-    lam_dofs = disc.region_dofs(Domain.FRACTURE, "lam")
-    nc, nb, d = lam_dofs.shape[0], lam_dofs.shape[1], surf.dim
-    lam = xl[lam_dofs] * problem.scales["lam"].scale
-    tau = xl[disc.region_dofs(Domain.FRACTURE, "tau")].reshape(nc, nb, d - 1) * problem.scales["tau"].scale
-    up, um = (xl[disc.region_dofs(Domain.FRACTURE, Trace("u", side))[:, :nb * d]].reshape(nc, nb, d)
-              for side in (Side.PLUS, Side.MINUS))
-    T = tangent_basis(surf.normals)                                             # (nc, d - 1, d)
-    s = np.einsum("cka,cia->cki", up - um, T) * problem.scales["u"].scale
-    _, first = np.unique(lam_dofs.ravel(), return_index=True)
-    return lam.ravel()[first], tau.reshape(-1, d - 1)[first], s.reshape(-1, d - 1)[first]
-
-
-def slip_columns(problem, X=None, t: float = 0.0) -> dict:
+def slip_columns(problem, X=None, t: float = 0.0, fields: dict | None = None) -> dict:
     """History columns of a frictional fracture: the largest slip magnitude
-    and the slipping area (monitors.contact_node_fields)."""
+    and the slipping area (from ``fields``, monitors.contact_node_fields at
+    (X, t) when not given)."""
     comm = problem.dm.comm
-    f = contact_node_fields(problem, X, t)
+    f = fields if fields is not None else contact_node_fields(problem, X, t)
     return {"slip_max": probes.global_max(comm, f["slip_magnitude"], empty=0.0),
             "slipping_area": probes.global_sum(comm, float(f["slipping_area"][0]))}
+
+
+class _CoulombScene(Scene):
+    """A scene whose fracture slips under Coulomb's law; ``normal_stress()``
+    is the in-situ compressive stress on it."""
+
+    def local_bound(self, lam):
+        """c0 + mu_f lam at the nodes."""
+        return self.p.fracture_cohesion + self.p.fracture_friction * lam
+
+    def bound(self) -> float:
+        """b = c0 + mu_f sigma_n: the shear stress at which the fracture slips."""
+        return self.local_bound(self.normal_stress())
 
 
 class _FrictionPatchMonitor(Monitor):
@@ -89,22 +83,21 @@ class _FrictionPatchMonitor(Monitor):
 
     def __call__(self, problem, t, X=None):
         sc, comm = self.scene, problem.dm.comm
-        lam, tau, s = fracture_state(problem, X, t)
-        self.last = slip_columns(problem, X, t)
+        f = contact_node_fields(problem, X, t)
+        lam, tau, s = problem.field_values("lam", X, t)[:, 0], f["shear_traction"], f["slip"]
         tau_s, slip = sc.exact(t)
         bound = sc.bound()
-        tau_ex = np.zeros(tau.shape[1])
-        tau_ex[0] = -tau_s                                  # tau opposes the + face's slip in +x
-        s_ex = np.zeros(tau.shape[1])
-        s_ex[0] = slip
+        ex = np.zeros(tau.shape[1])
+        ex[0] = 1.0                                         # the shear is along x
         mag = np.linalg.norm(tau, axis=1)
-        out = {"slip_max": probes.global_max(comm, np.linalg.norm(s, axis=1), empty=0.0),
-               "slip_exact": slip,
-               "slip_error": probes.global_max(comm, np.linalg.norm(s - s_ex, axis=1), empty=0.0),
-               "tau_error": probes.global_max(comm, np.linalg.norm(tau - tau_ex, axis=1), empty=0.0) / bound,
-               "lam_error": probes.global_max(comm, np.abs(lam - sc.sigma()), empty=0.0) / sc.sigma(),
-               "coulomb_max": probes.global_max(comm, mag - sc.local_bound(lam), empty=0.0) / bound,
-               **self.last}
+        out = {"slip_exact": slip,
+               "slip_error": probes.global_max(comm, np.linalg.norm(s - slip * ex, axis=1), empty=0.0),
+               "tau_error": probes.global_max(comm, np.linalg.norm(tau + tau_s * ex, axis=1),   # opposes slip
+                                              empty=0.0) / bound,
+               "lam_error": probes.global_max(comm, np.abs(lam - sc.normal_stress()),
+                                              empty=0.0) / sc.normal_stress(),
+               "coulomb_max": probes.global_max(comm, f["coulomb"], empty=0.0) / bound,
+               **slip_columns(problem, fields=f)}
         slipping = slip > 0
         out["law_error"] = probes.global_max(comm, np.abs(mag / sc.local_bound(lam) - 1.0),
                                              empty=0.0) if slipping else 0.0
@@ -121,7 +114,7 @@ class _FrictionPatchMonitor(Monitor):
 
 
 @register
-class FrictionPatch(Scene):
+class FrictionPatch(_CoulombScene):
     name = "friction_patch"
     description = "sheared fracture across the domain: stick below mu_f sigma, then uniform slip"
     parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT),
@@ -138,16 +131,8 @@ class FrictionPatch(Scene):
         p = self.p
         return p.rock_youngs_modulus / (2 * (1 + p.rock_poisson_ratio))
 
-    def sigma(self) -> float:
+    def normal_stress(self) -> float:
         return self.p.normal_stress(fracture_normal(self.p.friction_dim))
-
-    def bound(self) -> float:
-        """b = c0 + mu_f sigma: the shear stress at which the fracture slips."""
-        return self.p.fracture_cohesion + self.p.fracture_friction * self.sigma()
-
-    def local_bound(self, lam):
-        """c0 + mu_f lam at the nodes."""
-        return self.p.fracture_cohesion + self.p.fracture_friction * lam
 
     def delta(self, t: float) -> float:
         """Top displacement in x at time t (linear ramp to the final ratio)."""
@@ -181,7 +166,7 @@ class FrictionPatch(Scene):
         d = mesh.dim
         if d != p.friction_dim:
             raise InputError(f"option -thm_friction_dim = {p.friction_dim} but the mesh is {d}D")
-        sigma = self.sigma()
+        sigma = self.normal_stress()
         if not sigma > 0:
             raise InputError(f"option -thm_insitu_stress = {sigma:g}: friction_patch needs a compressive "
                              "normal stress on the fracture")
@@ -258,8 +243,7 @@ class _InclinedCrackMonitor(Monitor):
                                                     empty=0.0) / sc.normal_stress(),
                      "law_error": probes.global_max(comm, np.abs(tau / sc.local_bound(lam) - 1.0)[inner],
                                                     empty=0.0),
-                     "slip_max": probes.global_max(comm, f["slip_magnitude"], empty=0.0),
-                     "slipping_area": probes.global_sum(comm, float(f["slipping_area"][0]))}
+                     **slip_columns(problem, fields=f)}
         rows = probes.gather_root(comm, np.column_stack([r, slip, exact]))
         if rows is not None:
             order = np.argsort(rows[:, 0])
@@ -272,7 +256,7 @@ class _InclinedCrackMonitor(Monitor):
 
 
 @register
-class InclinedCrack(Scene):
+class InclinedCrack(_CoulombScene):
     name = "inclined_crack"
     description = "frictional crack inclined in uniaxial compression: slip against the mode II profile"
     parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT), InclinedCrackParams)
@@ -310,13 +294,6 @@ class InclinedCrack(Scene):
         n = self.normal()
         t = self.stress() @ n
         return t - (t @ n) * n
-
-    def bound(self) -> float:
-        return self.local_bound(self.normal_stress())
-
-    def local_bound(self, lam):
-        """c0 + mu_f lam."""
-        return self.p.fracture_cohesion + self.p.fracture_friction * lam
 
     def driving_stress(self) -> float:
         return max(float(np.linalg.norm(self.shear())) - self.bound(), 0.0)

@@ -30,12 +30,12 @@ from ..constraints import Dirichlet
 from ..errors import InputError
 from ..fields import Domain
 from ..monitors import FractureWells, contact_node_checks, fracture_vertices
-from .friction import slip_columns
 from ..params import CELSIUS, param
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
 from .contact import OPEN_TRACTION, contact_solver_defaults, fracture_normal
 from .fractured import WellsMonitor, heat_wells_monitor, transmissivity
+from .friction import slip_columns
 
 
 @dataclass(frozen=True)
