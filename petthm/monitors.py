@@ -214,6 +214,35 @@ def _contact_nodes(problem, X=None, t: float = 0.0):
     return lam_dofs, xl[lam_dofs] * problem.scales["lam"].scale, (up - um) * problem.scales["u"].scale, xl
 
 
+def _nodal_average(problem, dofs: np.ndarray, values: np.ndarray, covered: np.ndarray) -> np.ndarray:
+    """``values`` (n, m) at the local dofs ``dofs`` (n,) of one scalar field,
+    known where ``covered`` (the node is in a local cell): the average over
+    the ranks that know it, on every rank that holds the node (a rank can
+    hold a node of another rank's cells only).  Constrained dofs keep their
+    local value."""
+    from petsc4py import PETSc
+    dm = problem.dm
+    loc, glob = dm.createLocalVec(), dm.createGlobalVec()
+    out = values.copy()
+    cols = [covered.astype(float)] + [values[:, k] * covered for k in range(values.shape[1])]
+    shared = []
+    for col in cols:
+        loc.set(0.0)
+        loc.getArray()[dofs] = col
+        glob.set(0.0)
+        dm.localToGlobal(loc, glob, addv=PETSc.InsertMode.ADD_VALUES)
+        dm.globalToLocal(glob, loc, addv=PETSc.InsertMode.INSERT_VALUES)
+        shared.append(loc.getArray()[dofs].copy())
+    loc.destroy()
+    glob.destroy()
+    free = problem.disc.global_index[dofs] >= 0
+    count = shared[0]
+    ok = free & (count > 0)
+    for k in range(values.shape[1]):
+        out[ok, k] = shared[k + 1][ok] / count[ok]
+    return out
+
+
 def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0):
     """(largest |g| over closed lam nodes on this rank, and per fracture cell
     the largest |lam_mid - (lam_a + lam_b)/2| over its edges with both ends
@@ -237,8 +266,9 @@ def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0)
 
 
 def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray]:
-    """Fracture outputs at the contact traction's nodes (this rank's local
-    nodes, in the order of ``field_values("lam")``), SI: ``opening`` g, the
+    """Fracture outputs at the contact traction's nodes (every local node of
+    this rank, in the order of ``field_values("lam")``; a node no local cell
+    touches takes the value of the ranks whose cells do), SI: ``opening`` g, the
     ``aperture`` (a deformable fracture), and with friction the ``slip``
     (the tangential jump, a global vector), ``slip_magnitude``, the
     ``shear_traction`` (tau as a global vector) and the Coulomb function
@@ -264,10 +294,13 @@ def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray
     slot = np.full(xl.size, -1)
     slot[order] = np.arange(len(order))
     idx = slot[lam_dofs.ravel()]
+    covered = np.zeros(len(order), dtype=bool)
+    covered[idx] = True
     out = {}
     for name, v in per_cell.items():
         a = np.zeros((len(order), v.shape[-1]))
         a[idx] = v.reshape(-1, v.shape[-1])
+        a = _nodal_average(problem, order, a, covered)
         out[name] = a[:, 0] if a.shape[1] == 1 else a
     weights = np.abs(surf.detJ)[:, None] * nodal_rule(surf.rdim, disc.field("lam").degree).weights[None, :]
     out["weight"] = np.bincount(idx, weights=weights.ravel(), minlength=len(order))
