@@ -204,7 +204,7 @@ class Run:
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
         scene_defaults = dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm))
         propose_defaults(solver_defaults_by_size(scene_defaults, model.has("u"), problem.X.getSize(),
-                                                 run.direct_max_unknowns, model.has("tau")))
+                                                 run.direct_max_unknowns))
         self._pop("setup", st, t0)
         self.problem = problem
         return disc, problem, control, rs, setup.monitor

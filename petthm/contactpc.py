@@ -30,6 +30,13 @@ is spectrally equivalent to it with constants independent of the mesh
 under refinement.  Rows of lam that do not couple to u (an open node on the
 full space of ``vinewtonssls``) are solved by their diagonal and not glued.
 
+With Coulomb friction the block has the rows of the tangential traction
+tau too (kernels/friction.py): a sticking node's tau rows glue the
+tangential jump as lam glues the normal one (a closed sticking node is
+glued whole), a slipping node's are rotated to its slip direction and
+eliminated (``glue.slip_rotation``, ``glue.block_inverse``;
+docs/solvers.md "Friction").
+
 Everything is a parallel PETSc matrix or vector operation (``glue``: the
 pairs, normals, weights and Z).  The lam-recovery map G = diag(1/c) P^T
 also gives the Schur complement of the flow and heat fields
@@ -43,7 +50,7 @@ from petsc4py import PETSc
 
 from . import compat, pmg
 from .fieldsplit import mode_vectors, orthonormal_nullspace, served_rows
-from .glue import glue_maps, glued_basis
+from .glue import block_inverse, glue_maps, glued_basis
 from .solver import propose_defaults
 
 #: smoothing steps per multigrid level of the glued elasticity (default)
@@ -61,7 +68,7 @@ class ContactNullspacePC:
 
     def __init__(self):
         self.maps = self.A = self.Z = self.ksp = self._coarse = None
-        self.B = self.C = self.e_over_d = None
+        self.B = self.C = self.D = self.e_inv = None
         self._own_maps = False
         self._work: dict = {}
 
@@ -89,22 +96,25 @@ class ContactNullspacePC:
         self._work = {"up": self.A.createVecLeft(), "t": self.A.createVecLeft(), "u": self.A.createVecLeft(),
                       "ru": self.A.createVecLeft(),
                       "zr": self.Z.createVecRight(), "v": self.Z.createVecRight(),
-                      "s": self.maps.b.duplicate(), "lam": self.maps.b.duplicate()}
+                      "s": self.maps.b.duplicate(), "lam": self.maps.b.duplicate(),
+                      "xl": self.maps.b.duplicate()}
 
     def _eliminate(self, K):
-        """Eliminate the lam rows the glue does not hold (open nodes, and the
-        semismooth rows in transition of ``vinewtonssls``: D lam + B u = r
-        with D != 0) exactly: lam_E = D^-1 (r_E - B_E u), so the
-        elasticity becomes A - C_E D_E^-1 B_E (a normal stiffness on those
-        pairs) and the u residual loses C_E D_E^-1 r_E."""
+        """Eliminate the contact rows the glue does not hold (open nodes, the
+        semismooth rows in transition of ``vinewtonssls``, the tau rows of
+        slipping nodes) exactly: with D the contact rows' own block (per
+        node: lam, tau and their coupling), r_E = D_EE x_E + D_EG x_G + B_E u
+        gives x_E = D_EE^-1 (r_E - D_EG x_G - B_E u), so the elasticity
+        becomes A - C_E D_EE^-1 B_E (a stiffness on those pairs: normal
+        for an open row, across the slip direction for a slipping node in
+        3D) and the u residual loses C_E D_EE^-1 r_E.  The load that a
+        slipping node's tau takes from its glued lam (C_E D_EE^-1 D_EG,
+        friction following the normal traction) is left out of the glued
+        solve; the outer Krylov method corrects it."""
         m = self.maps
-        e = 1.0 - m.glued.getArray(readonly=True)
-        self.e_over_d = m.diag.duplicate()
-        self.e_over_d.getArray()[:] = e / _safe(m.diag.getArray(readonly=True))
-        self.B = K.createSubMatrix(m.ilam, m.iu)
-        self.C = K.createSubMatrix(m.iu, m.ilam)
-        Bs = self.B.copy()
-        Bs.diagonalScale(L=self.e_over_d)
+        self.B, self.C, self.D = m.contact_blocks(K)
+        self.e_inv = block_inverse(self.D, m.glued.getArray(readonly=True) == 0.0)
+        Bs = self.e_inv.matMult(self.B)
         CB = self.C.matMult(Bs)
         self.A.axpy(-1.0, CB, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         for obj in (Bs, CB):
@@ -150,13 +160,14 @@ class ContactNullspacePC:
             self.ksp.solve(x, y)
             return
         m, w = self.maps, self._work
-        xu, xl = x.getSubVector(m.iu), x.getSubVector(m.ilam)
+        xu, x_con = x.getSubVector(m.iu), x.getSubVector(m.ilam)
+        xl = w["xl"]
+        m.rot.mult(x_con, xl)                                    # the contact rows, rotated
         g = m.glued.getArray(readonly=True)
-        r_lam = xl.getArray(readonly=True)
-        w["s"].getArray()[:] = self.e_over_d.getArray(readonly=True) * r_lam
+        self.e_inv.mult(xl, w["s"])
         self.C.mult(w["s"], w["ru"])
-        w["ru"].aypx(-1.0, xu)                                   # r_u - C_E D_E^-1 r_E
-        w["s"].getArray()[:] = g * r_lam / _safe(m.b.getArray(readonly=True))
+        w["ru"].aypx(-1.0, xu)                                   # r_u - C_E D_EE^-1 r_E
+        w["s"].getArray()[:] = g * xl.getArray(readonly=True) / _safe(m.b.getArray(readonly=True))
         m.pt.multTranspose(w["s"], w["up"])                      # 1. u_p = P (r_lam / b)
         self.A.mult(w["up"], w["t"])
         w["t"].aypx(-1.0, w["ru"])                               # 2. r_u - A u_p
@@ -167,12 +178,15 @@ class ContactNullspacePC:
         self.A.mult(w["u"], w["t"])
         w["t"].aypx(-1.0, w["ru"])                               # 3. the force the glue carries
         m.pt.mult(w["t"], w["lam"])
-        self.B.mult(w["u"], w["s"])                              #    and B u of the eliminated rows
-        lam = w["lam"].getArray()
-        lam[:] = g * lam / _safe(m.c.getArray(readonly=True)) + \
-            self.e_over_d.getArray(readonly=True) * (r_lam - w["s"].getArray(readonly=True))
+        w["lam"].getArray()[:] *= g / _safe(m.c.getArray(readonly=True))
+        self.B.mult(w["u"], w["s"])                              #    and the eliminated rows:
+        self.D.multAdd(w["lam"], w["s"], w["s"])                 #    D_EE^-1 (r_E - B_E u - D_EG x_G)
+        w["s"].aypx(-1.0, xl)
+        self.e_inv.multAdd(w["s"], w["lam"], w["lam"])
+        m.rot.multTranspose(w["lam"], w["s"])                    # back from the rotated rows
+        w["s"].copy(w["lam"])
         x.restoreSubVector(m.iu, xu)
-        x.restoreSubVector(m.ilam, xl)
+        x.restoreSubVector(m.ilam, x_con)
         for iset, v in ((m.iu, w["u"]), (m.ilam, w["lam"])):
             sub = y.getSubVector(iset)
             v.copy(sub)
@@ -182,10 +196,10 @@ class ContactNullspacePC:
         for v in self._work.values():
             v.destroy()
         self._work = {}
-        for obj in (self.A, self.Z, self._coarse, self.B, self.C, self.e_over_d):
+        for obj in (self.A, self.Z, self._coarse, self.B, self.C, self.D, self.e_inv):
             if obj is not None:
                 obj.destroy()
-        self._coarse = self.B = self.C = self.e_over_d = None
+        self._coarse = self.B = self.C = self.D = self.e_inv = None
         if self.maps is not None and self._own_maps:
             self.maps.destroy()
         self.maps = self.A = self.Z = None

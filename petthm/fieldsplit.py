@@ -370,15 +370,17 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
     r0 = P.getOwnershipRange()[0]
     has_extra = extra is not None and probes.global_count(comm, np.isin(split.rows, _rows_of(extra))) > 0
 
-    def positions(field):
-        return PETSc.IS().createGeneral(
-            (np.flatnonzero(np.isin(rows, context.fields[field])) + r0).astype(compat.INT), comm=comm)
+    def positions(*fields):
+        mine = np.zeros(len(rows), dtype=bool)
+        for field in fields:
+            mine |= np.isin(rows, context.fields.get(field, ()))
+        return PETSc.IS().createGeneral((np.flatnonzero(mine) + r0).astype(compat.INT), comm=comm)
     iu = positions("u")
     S = P.createSubMatrix(split.iset, split.iset)
     Aus = P.createSubMatrix(iu, split.iset)
     terms = []
     if maps is not None:
-        ilam = positions("lam")
+        ilam = positions("lam", "tau")                        # the contact rows of the glue maps
         Asl = P.createSubMatrix(split.iset, ilam)
         G = maps.recovery(coupled=True)
         GA = G.matMult(Aus)

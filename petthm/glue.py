@@ -31,13 +31,25 @@ STIFF_RATIO = 100.0
 
 @dataclass
 class ContactStructure:
-    """The {u, lam} pairs of a problem in its global numbering: ``pairs``
-    (N x N): row lam_i, columns u+-_i (each free component), value
-    side * (component + 1), side = +1 on the + copy and -1 on the - copy;
-    ``u``, ``lam``: this rank's (sorted) global unknowns of the two fields."""
+    """The contact pairs of a problem in its global numbering: ``pairs``
+    (N x N): row r (a contact unknown: lam_i, or a component of the
+    friction traction tau_i), columns u+-_i (each free component of the
+    node's two copies), value side * (component + 1), side = +1 on the +
+    copy and -1 on the - copy; ``u``, ``lam``, ``tau``: this rank's
+    (sorted) global unknowns of the fields (``tau`` empty without
+    friction); ``tangent``: for each owned unknown of the full system
+    (from ``first``), the tangent t_k of a tau row as k + 1, 0 on every
+    other row (the lam rows constrain the normal)."""
     pairs: PETSc.Mat
     u: np.ndarray
     lam: np.ndarray
+    tau: np.ndarray
+    tangent: np.ndarray
+    first: int
+
+    def constraints(self) -> np.ndarray:
+        """The contact unknowns (lam and tau), this rank's, sorted."""
+        return np.union1d(self.lam, self.tau)
 
     def destroy(self) -> None:
         self.pairs.destroy()
@@ -45,40 +57,66 @@ class ContactStructure:
 
 def contact_structure(problem) -> ContactStructure:
     """List every (lam, u+, u-) of the fracture's lam nodes whose u is split
-    (not the tip): the vertices, and the edge midpoints of a P2 lam.  A
-    pair seen by several ranks (ghost cohesive cells) is entered by each of
-    them and divided by the number of ranks that did."""
+    (not the tip): the vertices, and the edge midpoints of a P2 lam; and
+    every (tau_k, u+, u-) of the same nodes with friction.  A pair seen by
+    several ranks (ghost cohesive cells) is entered by each of them and
+    divided by the number of ranks that did."""
     from .model import Domain, Side, Trace
     disc = problem.disc
     g = disc.global_index
     d = disc.mesh.dim
+    names = [f.name for f in disc.fields]
     lam_dofs = disc.region_dofs(Domain.FRACTURE, "lam")                              # (nc, nb)
-    nb = lam_dofs.shape[1]
+    nc, nb = lam_dofs.shape
     up, um = (disc.region_dofs(Domain.FRACTURE, Trace("u", side))[:, :nb * d].reshape(-1, d)
               for side in (Side.PLUS, Side.MINUS))
     local, first = np.unique(lam_dofs.ravel(), return_index=True)
     split = up[first, 0] != um[first, 0]
-    lam = g[local[split]]
+    node_rows = [g[local[split]][:, None]]                                           # (n, 1 + d - 1)
+    kinds = [np.zeros(1, dtype=int)]
+    if "tau" in names:
+        tau_dofs = disc.region_dofs(Domain.FRACTURE, "tau").reshape(nc * nb, d - 1)   # same nodes as lam
+        node_rows.append(g[tau_dofs[first[split]]])
+        kinds.append(np.arange(1, d))
+    rows_by_node = np.concatenate(node_rows, axis=1)                                  # (n, k)
+    kind = np.concatenate(kinds)
+    k = rows_by_node.shape[1]
     u = np.concatenate([g[up[first[split]]], g[um[first[split]]]], axis=1)          # (n, 2d)
     comps = np.arange(d)
     code = np.concatenate([comps + 1, -(comps + 1)]).astype(float)
-    rows = np.repeat(lam, 2 * d)
-    ok = (rows >= 0) & (u.ravel() >= 0)
+    rows = np.repeat(rows_by_node.ravel(), 2 * d)
+    cols = np.repeat(u, k, axis=0).ravel()
+    ok = (rows >= 0) & (cols >= 0)
     comm = problem.dm.comm
     n, N = problem.X.getSizes()
-    count = problem.X.duplicate()
-    count.set(0.0)
-    listed = lam[lam >= 0]
-    count.setValues(listed.astype(compat.INT), np.ones(len(listed)), addv=PETSc.InsertMode.ADD_VALUES)
-    count.assemble()
-    pairs = _coo_matrix(rows[ok], u.ravel()[ok], np.tile(code, len(lam))[ok], (n, N), (n, N), comm)
+    listed = rows_by_node.ravel()
+    mine = listed >= 0
+    count = _marked(problem.X, listed[mine], np.ones(int(mine.sum())), PETSc.InsertMode.ADD_VALUES)
+    tangent = _marked(problem.X, listed[mine], np.tile(kind, len(rows_by_node))[mine],
+                      PETSc.InsertMode.INSERT_VALUES)
+    pairs = _coo_matrix(rows[ok], cols[ok], np.tile(code, len(listed))[ok], (n, N), (n, N), comm)
     c = count.getArray()
     count.getArray()[:] = np.where(c > 0, 1.0 / np.maximum(c, 1.0), 1.0)
     pairs.diagonalScale(L=count)
+    fields = {name: iset.getIndices().copy()
+              for name, iset in zip(*problem.dm.createFieldDecomposition()[:2])}
+    none = np.zeros(0, dtype=compat.INT)
+    tangent_of = np.rint(tangent.getArray(readonly=True)).astype(int)
+    out = ContactStructure(pairs, fields["u"], fields["lam"], fields.get("tau", none), tangent_of,
+                           tangent.getOwnershipRange()[0])
     count.destroy()
-    names, isets, _ = problem.dm.createFieldDecomposition()
-    fields = {name: iset.getIndices().copy() for name, iset in zip(names, isets)}
-    return ContactStructure(pairs, fields["u"], fields["lam"])
+    tangent.destroy()
+    return out
+
+
+def _marked(like: PETSc.Vec, idx: np.ndarray, values: np.ndarray, mode) -> PETSc.Vec:
+    """A vector of ``like``'s layout, zero but at the global ``idx`` (any
+    rank's), which get ``values`` (added or inserted by ``mode``)."""
+    out = like.duplicate()
+    out.set(0.0)
+    out.setValues(idx.astype(compat.INT), np.asarray(values, dtype=float), addv=mode)
+    out.assemble()
+    return out
 
 
 def _coo_matrix(rows, cols, vals, row_sizes, col_sizes, comm) -> PETSc.Mat:
@@ -99,11 +137,14 @@ def _index_set(idx: np.ndarray, comm) -> PETSc.IS:
 @dataclass
 class GlueMaps:
     """The contact structure of one operator K (rows ``rows`` of the full
-    system, in K's order): ``iu``, ``ilam`` the u and lam rows of K (in K's
-    numbering), ``u_full`` the full-system index of each u row; ``pt``
-    (lam x u): +n_i on u+_i, -n_i on u-_i (the transpose of the pair matrix
-    P); ``glued`` (0/1), ``b``, ``c``, ``diag`` (D) lam vectors; ``code``
-    (u vector): side * (component + 1) of a paired u row, 0 elsewhere."""
+    system, in K's order): ``iu``, ``ilam`` the u rows and the contact rows
+    (lam, and tau with friction) of K (in K's numbering), ``u_full`` the
+    full-system index of each u row; ``pt`` (contact x u): +e on u+_i, -e on
+    u-_i with e the row's direction (n_i for lam, t_k for tau_k; the
+    transpose of the pair matrix P); ``glued`` (0/1), ``b``, ``c``,
+    ``diag`` (D) contact-row vectors; ``code`` (u vector): side *
+    (component + 1) of a paired u row, 0 elsewhere; ``kind`` (numpy, per
+    contact row): 0 for lam, k for tau_k."""
     iu: PETSc.IS
     ilam: PETSc.IS
     u_full: np.ndarray
@@ -114,6 +155,15 @@ class GlueMaps:
     c: PETSc.Vec
     diag: PETSc.Vec
     code: PETSc.Vec
+    kind: np.ndarray
+    rot: PETSc.Mat
+
+    def contact_blocks(self, K: PETSc.Mat) -> tuple[PETSc.Mat, PETSc.Mat, PETSc.Mat]:
+        """(B, C, D): the contact rows' weak jumps (contact x u), their face
+        loads (u x contact) and their own block (contact x contact) of K,
+        in the rotated contact rows of ``rot`` (``slip_rotation``): R B,
+        C R^T, R D R^T."""
+        return _rotated_blocks(K, self.iu, self.ilam, self.rot)
 
     def recovery(self, coupled: bool = False) -> PETSc.Mat:
         """G = diag(glued / c) P^T (lam x u): lam from the normal force the
@@ -125,7 +175,7 @@ class GlueMaps:
         pressure keeps the storage of the joint's compliance there."""
         G = self.pt.copy()
         mask = self.glued.duplicate()
-        mask.getArray()[:] = (self.b.getArray(readonly=True) != 0.0) if coupled else \
+        mask.getArray()[:] = ((self.b.getArray(readonly=True) != 0.0) & (self.kind == 0)) if coupled else \
             self.glued.getArray(readonly=True)
         c = _nonzero(self.c)
         mask.pointwiseDivide(mask, c)
@@ -135,7 +185,8 @@ class GlueMaps:
         return G
 
     def destroy(self) -> None:
-        for obj in (self.iu, self.ilam, self.st, self.pt, self.glued, self.b, self.c, self.diag, self.code):
+        for obj in (self.iu, self.ilam, self.st, self.pt, self.glued, self.b, self.c, self.diag, self.code,
+                    self.rot):
             obj.destroy()
 
 
@@ -152,41 +203,88 @@ def glue_maps(K: PETSc.Mat, structure: ContactStructure, rows: np.ndarray) -> Gl
     unknowns ``rows`` (sorted)."""
     comm = K.getComm()
     r0 = K.getOwnershipRange()[0]
-    is_u, is_lam = np.isin(rows, structure.u), np.isin(rows, structure.lam)
+    is_u, is_lam = np.isin(rows, structure.u), np.isin(rows, structure.constraints())
     iu = _index_set(np.flatnonzero(is_u) + r0, comm)
     ilam = _index_set(np.flatnonzero(is_lam) + r0, comm)
+    kind = structure.tangent[rows[is_lam] - structure.first]                 # 0: lam, k: tau along t_k
     st = structure.pairs.createSubMatrix(_index_set(rows[is_lam], comm), _index_set(rows[is_u], comm))
-    B = K.createSubMatrix(ilam, iu)
+    D0 = K.createSubMatrix(ilam, ilam)
+    rot = slip_rotation(D0, kind > 0)
+    D0.destroy()
+    B, C, D = _rotated_blocks(K, iu, ilam, rot)
     ones = st.createVecLeft()
     ones.set(1.0)
-    code = st.createVecRight()
-    st.multTranspose(ones, code)                               # side * (comp + 1) of each paired u row
-    normal = _normals_from_opening(B, code)                    # (m, d) unit normals, from B
-    pt = _signed_normals(st, normal)
-    w = pt.createVecRight()
-    pt.multTranspose(ones, w)                                  # side * n of each paired u row
-    b = B.createVecLeft()
-    B.mult(w, b)
-    C = K.createSubMatrix(iu, ilam)
-    c = C.createVecRight()
-    C.multTranspose(w, c)
-    D = K.createSubMatrix(ilam, ilam)
+    code = _pair_codes(st, ones)                               # side * (comp + 1) of each paired u row
+    pt = _signed_normals(st, _normals_from_opening(B, code))   # each row's direction, from B
+    b, c = _lumped_weights(pt, B, C, kind)
     diag = D.getDiagonal()
     glued = b.duplicate()
     glued.getArray()[:] = _glued_rows(K, iu, st, b, c, diag).astype(float)
-    for obj in (B, C, D, ones, w):
+    for obj in (B, C, D, ones):
         obj.destroy()
-    return GlueMaps(iu, ilam, rows[is_u].copy(), st, pt, glued, b, c, diag, code)
+    return GlueMaps(iu, ilam, rows[is_u].copy(), st, pt, glued, b, c, diag, code, kind, rot)
+
+
+def _rotated_blocks(K: PETSc.Mat, iu: PETSc.IS, ilam: PETSc.IS, rot: PETSc.Mat):
+    """R B, C R^T, R D R^T of K's contact rows ``ilam`` (see ``GlueMaps.contact_blocks``)."""
+    B0, C0, D0 = K.createSubMatrix(ilam, iu), K.createSubMatrix(iu, ilam), K.createSubMatrix(ilam, ilam)
+    rt = rot.copy()
+    rt.transpose()
+    B, C = rot.matMult(B0), C0.matMult(rt)
+    DR = D0.matMult(rt)
+    D = rot.matMult(DR)
+    for obj in (B0, C0, D0, DR, rt):
+        obj.destroy()
+    return B, C, D
+
+
+def _pair_codes(st: PETSc.Mat, ones: PETSc.Vec) -> PETSc.Vec:
+    """side * (component + 1) of each u row of the pairs ``st``, 0 on the
+    other rows (the listing's column sums over the number of contact rows
+    of the node: lam, and the tau components with friction)."""
+    code, count = st.createVecRight(), st.createVecRight()
+    st.multTranspose(ones, code)
+    pattern = pattern_of(st)
+    pattern.multTranspose(ones, count)
+    code.pointwiseDivide(code, _nonzero(count))
+    for obj in (count, pattern):
+        obj.destroy()
+    return code
+
+
+def _lumped_weights(pt: PETSc.Mat, B: PETSc.Mat, C: PETSc.Mat, kind: np.ndarray):
+    """b = B w and c = C^T w of each contact row, w = P 1 over the rows of
+    its own kind (the normal, or the tangent t_k): the lumped weights of
+    the row's weak jump and of its face load, with the other directions'
+    rows of the same node left out (they are orthogonal to it)."""
+    b, c = B.createVecLeft(), C.createVecRight()
+    b.set(0.0)
+    c.set(0.0)
+    mask, w, bk, ck = b.duplicate(), pt.createVecRight(), b.duplicate(), c.duplicate()
+    for k in range(int(probes.global_max(B.getComm(), kind, 0)) + 1):
+        on = (kind == k).astype(float)
+        mask.getArray()[:] = on
+        pt.multTranspose(mask, w)                              # side * direction of each paired u row
+        B.mult(w, bk)
+        C.multTranspose(w, ck)
+        b.getArray()[:] += on * bk.getArray(readonly=True)
+        c.getArray()[:] += on * ck.getArray(readonly=True)
+    for obj in (mask, w, bk, ck):
+        obj.destroy()
+    return b, c
 
 
 def _glued_rows(K: PETSc.Mat, iu: PETSc.IS, st: PETSc.Mat, b: PETSc.Vec, c: PETSc.Vec,
                 diag: PETSc.Vec) -> np.ndarray:
-    """Which lam rows the glue holds: those with a weak opening (b != 0) and
-    no diagonal, or one so small that eliminating the row would add a
-    normal stiffness k = |b c / D| above ``STIFF_RATIO`` times the mean
-    diagonal of the elasticity at the row's pair (``vinewtonssls``'s rows
-    of closed nodes); the others (open nodes, and the nodes in transition
-    of ``vinewtonssls``) are eliminated exactly by the contact PC."""
+    """Which contact rows (rotated: ``slip_rotation``) the glue holds: those
+    with a weak jump (b != 0) and no diagonal (a closed node's lam row; a
+    sticking node's tau rows, C = c ds), and those with a diagonal so small
+    that eliminating the row would add a stiffness k = |b c / D| above
+    ``STIFF_RATIO`` times the mean diagonal of the elasticity at the row's
+    pair (``vinewtonssls``'s rows of closed nodes; the row across the slip
+    direction of a node that has just started to slip); the others (open
+    nodes, the nodes in transition of ``vinewtonssls``, the slip direction
+    of a slipping node) are eliminated exactly by the contact PC."""
     dK = K.getDiagonal()
     dA = dK.getSubVector(iu)
     absd = dA.copy()
@@ -208,7 +306,8 @@ def _glued_rows(K: PETSc.Mat, iu: PETSc.IS, st: PETSc.Mat, b: PETSc.Vec, c: PETS
 
 
 def _normals_from_opening(B: PETSc.Mat, code: PETSc.Vec) -> np.ndarray:
-    """Unit normal at each lam row: the sum of the row's entries on the +
+    """Unit direction of each contact row (the normal of a lam row, the
+    tangent of a sticking tau row): the sum of the row's entries on the +
     copy's component k minus those on the - copy's, for each k (the weak
     opening int mu (u+ - u-) . n: its + entries are int mu phi n_k)."""
     cd = code.getArray(readonly=True)
@@ -239,10 +338,12 @@ def _signed_normals(st: PETSc.Mat, normal: np.ndarray) -> PETSc.Mat:
 def glued_basis(maps: GlueMaps, A: PETSc.Mat) -> PETSc.Mat:
     """Z (u x v, orthonormal columns): the displacements that keep every
     glued node glued.  A u row that no glued node holds is a column of its
-    own; a glued pair with all 2d components free gets the tangential
-    components of each copy and one shared normal component; a pair with
-    fixed components (a symmetry plane) an orthonormal basis of the null
-    space of its constraint n . (u+ - u-) over its free components."""
+    own; a pair glued along its normal only, with all 2d components free,
+    gets the tangential components of each copy and one shared normal
+    component; a pair with fixed components (a symmetry plane), or glued
+    along several directions (a closed sticking node), an orthonormal basis
+    of the null space of its constraints e . (u+ - u-) over its free
+    components (``_pair_bases``)."""
     comm = A.getComm()
     r0, r1 = A.getOwnershipRange()
     held = maps.code.duplicate()
@@ -254,18 +355,15 @@ def glued_basis(maps: GlueMaps, A: PETSc.Mat) -> PETSc.Mat:
     ai, aj, codes = maps.st.getValuesCSR()
     codes = np.rint(codes).astype(int)
     vals = maps.pt.getValuesCSR()[2]
-    g = np.flatnonzero(maps.glued.getArray(readonly=True) > 0)
+    members = _rows_by_pair(ai, aj, np.flatnonzero(maps.glued.getArray(readonly=True) > 0))
     rows, cols, out = [free], [np.arange(len(free))], [np.ones(len(free))]
     ncol = len(free)
-    for sel, order in _patterns(ai, codes, g):
+    for sel, order in _patterns(ai, codes, members[:, 0]):
         idx = ai[sel][:, None] + order                         # (k, nf) CSR positions, + copy first
-        signed = vals[idx]
-        constrains = np.linalg.norm(signed, axis=1) > 1e-12
-        for part in (constrains, ~constrains):
-            if not part.any():
-                continue
-            v = _pair_basis(signed[part], codes[idx[0]]) if part is constrains else \
-                np.broadcast_to(np.eye(idx.shape[1]), (int(part.sum()),) + (idx.shape[1],) * 2)
+        group = members[np.searchsorted(members[:, 0], sel)]  # the node's glued rows
+        at = ai[np.maximum(group, 0)][:, :, None] + order[:, None, :]
+        signed = np.where(group[:, :, None] >= 0, vals[at], 0.0)   # (k, rows of the node, nf)
+        for part, v in _pair_bases(signed, codes[idx[0]]):
             k, nb, nf = v.shape
             c = ncol + np.arange(k * nb).reshape(k, nb)
             ncol += k * nb
@@ -276,6 +374,130 @@ def glued_basis(maps: GlueMaps, A: PETSc.Mat) -> PETSc.Mat:
     r, c, v = (np.concatenate(a) for a in (rows, cols, out))
     keep = v != 0.0
     return _coo_matrix(r[keep], c[keep] + start, v[keep], (r1 - r0, PETSc.DECIDE), (ncol, PETSc.DECIDE), comm)
+
+
+def _rows_by_pair(ai, aj, rows) -> np.ndarray:
+    """The glued contact rows grouped by the node pair they constrain
+    (rows of one node list the same u columns): (pairs, d) local rows, the
+    first column sorted, -1 where a node has fewer glued rows."""
+    if not len(rows):
+        return np.zeros((0, 1), dtype=int)
+    key = aj[ai[rows]]                                         # the pair's first u column
+    order = np.lexsort((rows, key))
+    rows, key = rows[order], key[order]
+    _, start, count = np.unique(key, return_index=True, return_counts=True)
+    out = -np.ones((len(start), int(count.max())), dtype=int)
+    rank = np.arange(len(rows)) - np.repeat(start, count)
+    out[np.repeat(np.arange(len(start)), count), rank] = rows
+    return out[np.argsort(out[:, 0])]
+
+
+def _pair_bases(signed: np.ndarray, codes: np.ndarray):
+    """Orthonormal bases of the glued displacements of k pairs with the
+    constraint rows ``signed`` (k, rows, nf; zero rows: none): yields
+    (mask of the pairs, bases (m, nb, nf)) per kind.  A pair with one
+    constraint (the normal of a closed node) takes ``_pair_basis``; with
+    none (its rows restricted to the free components vanish) every
+    component is its own column; with several (a sticking closed node:
+    the normal and the tangents) the null space of its constraints."""
+    k, m, nf = signed.shape
+    norms = np.linalg.norm(signed, axis=2)
+    count = (norms > 1e-12).sum(axis=1)
+    if (count == 1).any():
+        part = count == 1
+        one = signed[part, np.argmax(norms[part], axis=1)]
+        yield part, _pair_basis(one, codes)
+    if (count == 0).any():
+        part = count == 0
+        yield part, np.broadcast_to(np.eye(nf), (int(part.sum()), nf, nf))
+    if (count > 1).any():
+        part = np.flatnonzero(count > 1)
+        _, sv, vt = np.linalg.svd(signed[part])
+        rank = (sv > 1e-10 * sv[:, :1]).sum(axis=1)
+        for r in np.unique(rank):
+            mask = np.zeros(k, dtype=bool)
+            mask[part[rank == r]] = True
+            yield mask, vt[rank == r][:, r:, :]
+
+
+def node_blocks(D: PETSc.Mat, keep: np.ndarray):
+    """The diagonal blocks of D over its owned rows ``keep`` (bool per owned
+    row) for a D whose nonzeros couple only small groups of rows of one
+    rank (the contact rows of one node: lam and the tau components of its
+    friction law, physics.md section 3): yields (rows (k, m), blocks
+    (k, m, m)) per block size m, rows local, in the order of D."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    r0, r1 = D.getOwnershipRange()
+    n = r1 - r0
+    ai, aj, av = D.getValuesCSR()
+    row = np.repeat(np.arange(n), np.diff(ai))
+    col = aj - r0
+    big = np.abs(av) > 1e-14 * probes.global_max(D.getComm(), np.abs(av), 0.0)
+    sel = (col >= 0) & (col < n) & big
+    sel[sel] &= keep[row[sel]] & keep[col[sel]]
+    row, col, val = row[sel], col[sel], av[sel]
+    _, label = connected_components(coo_matrix((np.ones(len(row)), (row, col)), shape=(n, n)), directed=False)
+    kept = np.flatnonzero(keep)
+    order = kept[np.argsort(label[kept], kind="stable")]
+    _, start, size = np.unique(label[order], return_index=True, return_counts=True)
+    position = np.zeros(n, dtype=int)
+    position[order] = np.arange(len(order)) - np.repeat(start, size)
+    group_of = -np.ones(n, dtype=int)
+    group_of[order] = np.repeat(np.arange(len(start)), size)
+    for m in np.unique(size):
+        which = np.flatnonzero(size == m)
+        slot = -np.ones(len(start), dtype=int)
+        slot[which] = np.arange(len(which))
+        on = slot[group_of[row]] >= 0
+        blocks = np.zeros((len(which), m, m))
+        blocks[slot[group_of[row[on]]], position[row[on]], position[col[on]]] = val[on]
+        yield order[start[which][:, None] + np.arange(m)], blocks
+
+
+def _block_diagonal(D: PETSc.Mat, parts) -> PETSc.Mat:
+    """A matrix of D's layout from diagonal blocks [(rows (k, m), blocks (k, m, m)), ...]."""
+    r0 = D.getOwnershipRange()[0]
+    out_r, out_c, out_v = [np.zeros(0, dtype=int)], [np.zeros(0, dtype=int)], [np.zeros(0)]
+    for rows, blocks in parts:
+        m = rows.shape[1]
+        out_r.append(np.repeat(rows, m, axis=1).ravel() + r0)
+        out_c.append(np.tile(rows, (1, m)).ravel() + r0)
+        out_v.append(blocks.ravel())
+    r, c, v = (np.concatenate(a) for a in (out_r, out_c, out_v))
+    return _coo_matrix(r, c, v, D.getSizes()[0], D.getSizes()[1], D.getComm())
+
+
+def block_inverse(D: PETSc.Mat, keep: np.ndarray) -> PETSc.Mat:
+    """The inverse of D restricted to its owned rows and columns ``keep``,
+    zero elsewhere (``node_blocks``).  A zero 1 x 1 block is taken as 1 (a
+    row with no diagonal that is not glued couples to nothing); larger
+    singular blocks take the pseudo-inverse."""
+    def inverse(blocks):
+        if blocks.shape[1] == 1:
+            return 1.0 / np.where(blocks == 0.0, 1.0, blocks)
+        return np.linalg.pinv(blocks)
+    return _block_diagonal(D, [(rows, inverse(blocks)) for rows, blocks in node_blocks(D, keep)])
+
+
+def slip_rotation(D: PETSc.Mat, tau: np.ndarray) -> PETSc.Mat:
+    """R (contact x contact, orthogonal): the identity, except on the tau rows
+    ``tau`` of a slipping node in 3D, whose law's block D_k (I - r (I - zz))
+    (r = b/|z| < 1, z the trial traction) couples the two tangents: there R
+    takes them to the eigenvectors of the block, the slip direction z (row
+    D_k: tau along z is the bound, eliminated) and the direction across it
+    (row D_k (1 - r), with the stiffness c r of the slip across the slip
+    direction: a constraint as r -> 1).  R D R^T is diagonal per node, so
+    each rotated row can be glued or eliminated on its own."""
+    r0, r1 = D.getOwnershipRange()
+    parts = [(np.arange(r1 - r0)[~tau][:, None], np.ones((int((~tau).sum()), 1, 1)))]
+    for rows, blocks in node_blocks(D, tau):
+        if rows.shape[1] == 1:
+            parts.append((rows, np.ones_like(blocks)))
+        else:
+            _, vectors = np.linalg.eigh(0.5 * (blocks + np.swapaxes(blocks, 1, 2)))
+            parts.append((rows, np.swapaxes(vectors, 1, 2)))            # rows of R: the eigenvectors
+    return _block_diagonal(D, parts)
 
 
 def pattern_of(M: PETSc.Mat) -> PETSc.Mat:

@@ -195,5 +195,4 @@ class RunParams:
                                      "more iterations than this (0: the cost rule of -thm_pc_reuse)", lo=0)
     direct_max_unknowns: int = param(50000, "-", "scenes with displacement propose the block "
                                      "preconditioner of options/solvers/block.opts above this many "
-                                     "unknowns and a direct solve up to it (docs/solvers.md; with "
-                                     "friction always the direct solve)", lo=0)
+                                     "unknowns and a direct solve up to it (docs/solvers.md)", lo=0)

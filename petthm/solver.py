@@ -74,7 +74,7 @@ BLOCK_RECIPE = {
     "ksp_gmres_restart": "100",
     "pc_type": "python",
     "pc_python_type": "petthm.fieldsplit.VIFieldSplit",
-    "vi_groups": "mech=u+lam,pm=pm,pf=pf,Tf=Tf,Tm=Tm",
+    "vi_groups": "mech=u+lam+tau,pm=pm,pf=pf,Tf=Tf,Tm=Tm",
     "vi_pc_fieldsplit_type": "multiplicative",
     "vi_fieldsplit_mech_ksp_type": "preonly",
     "vi_fieldsplit_mech_pc_type": "python",
@@ -85,13 +85,12 @@ BLOCK_RECIPE = {
 
 
 def solver_defaults_by_size(scene_defaults: dict[str, str], has_displacement: bool, unknowns: int,
-                            direct_max: int, has_friction: bool = False) -> dict[str, str]:
+                            direct_max: int) -> dict[str, str]:
     """The scene's solver defaults, with the block preconditioner in place of
     its linear solver when the problem has displacement and more than
     ``direct_max`` unknowns (-thm_direct_max_unknowns): a direct solve's
-    memory and time grow faster than the problem.  Not with friction: the
-    block recipe has no place for the tangential traction yet."""
-    if not has_displacement or unknowns <= direct_max or has_friction:
+    memory and time grow faster than the problem."""
+    if not has_displacement or unknowns <= direct_max:
         return scene_defaults
     return dict(scene_defaults, **BLOCK_RECIPE)
 

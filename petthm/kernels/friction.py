@@ -118,8 +118,8 @@ def _law_state(fr: Friction, ctx) -> _LawState:
     bound = fr.bound(lam)
     b = np.maximum(bound, 0.0)
     norm = np.linalg.norm(z, axis=-1)
-    slip = norm > b
-    safe = np.where(slip, norm, 1.0)
+    slip = (norm > b) | (b <= 0.0)          # b = 0: P_0 = 0, tau = 0 whatever z (an open node slides)
+    safe = np.where(norm > 0.0, norm, 1.0)
     zhat = z / safe[..., None]
     ratio = np.where(slip, b / safe, 0.0)[..., None, None]
     k = tau.shape[-1]

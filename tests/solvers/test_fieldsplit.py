@@ -138,3 +138,46 @@ def test_vi_fieldsplit_fracture_inflation(tmp_path, method):
           s["ksp_iterations"], "final pressure, opening vs direct", dp, dw)
     assert s["status"] == "completed" and max(its) <= 15
     assert dp <= 1e-6 and dw <= 1e-4
+
+
+@pytest.mark.parametrize("dim,degree,ranks", [(2, 2, 1), (3, 1, 1), (3, 2, 1), (3, 2, 2)])
+def test_vi_fieldsplit_friction_patch(tmp_path, dim, degree, ranks):
+    """friction_patch (u, lam, tau; stick, then the whole fracture slips)
+    with the block recipe: the sticking nodes' tau rows glue the tangential
+    jump, the slipping ones are eliminated (docs/solvers.md).  The
+    criteria of the direct solve (tests/verification/test_friction.py),
+    with lam to 1e-9 (the Krylov solve stops at 1e-10), no rejected step,
+    <= 40 Krylov per Newton (measured 10-21); 2 ranks as 1."""
+    out = tmp_path / f"np{ranks}"
+    _, s = run_petthm("friction_patch", out, "-options_file", RECIPE, "-thm_friction_dim", dim,
+                      "-thm_fe_degree", degree, ranks=ranks)
+    e = s["error"]
+    rows = list(csv.DictReader(open(out / "history.csv")))[1:]
+    per = [int(r["ksp_its"]) / max(int(r["snes_its"]), 1) for r in rows]
+    print(dim, degree, ranks, "Krylov per Newton", per, e)
+    assert s["status"] == "completed" and s["rejected_steps"] == 0 and max(per) <= 40
+    assert e["stick_slip_max"] <= 1e-12 and e["law_error"] <= 1e-8
+    assert e["slip_error"] <= 1e-9 * s["slip_exact_final"]
+    assert e["tau_error"] <= 1e-8 and e["lam_error"] <= 1e-9
+    assert s["slip_final"] == pytest.approx(s["slip_exact_final"], rel=1e-8) and s["slip_exact_final"] > 0
+    if ranks > 1:                                           # the serial run's history, step by step
+        run_petthm("friction_patch", tmp_path / "np1", "-options_file", RECIPE, "-thm_friction_dim", dim,
+                   "-thm_fe_degree", degree)
+        serial = list(csv.DictReader(open(tmp_path / "np1" / "history.csv")))[1:]
+        assert len(serial) == len(rows)
+        for a, b in zip(serial, rows):
+            assert abs(float(a["slip_max"]) - float(b["slip_max"])) <= 1e-9 * s["slip_exact_final"]
+
+
+def test_vi_fieldsplit_inclined_crack(tmp_path):
+    """inclined_crack (2D, P2, a/10: closed, slipping in its centre, sticking
+    near the tips) with the block recipe: the direct solve's slip profile
+    error and centre slip (1e-6)."""
+    common = ("-options_file", f"{ROOT}/options/scenes/inclined_crack.opts", "-thm_inclined_crack_size", 0.1)
+    _, ref = run_petthm("inclined_crack", tmp_path / "direct", *common)
+    _, s = run_petthm("inclined_crack", tmp_path / "block", *common, "-options_file", RECIPE)
+    print("slip L2 error direct", ref["slip_l2_error"], "block", s["slip_l2_error"],
+          "Krylov", s["ksp_iterations"], "Newton", s["snes_iterations"])
+    assert s["status"] == "completed" and s["law_error"] <= 1e-8
+    assert s["slip_centre"] == pytest.approx(ref["slip_centre"], rel=1e-6)
+    assert s["slip_l2_error"] == pytest.approx(ref["slip_l2_error"], rel=1e-4)
