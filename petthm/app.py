@@ -12,7 +12,6 @@ needs such a mesh, and one without fracture physics refuses it.
 """
 from __future__ import annotations
 
-import math
 import os
 import time
 
@@ -20,7 +19,7 @@ from petsc4py import PETSc
 
 from . import __version__, compat, params as P
 from .constraints import boundary_entries
-from .errors import InputError
+from .errors import InputError, petsc_option_errors
 from .fields import Discretisation
 from .mesh import Mesh, distribute, label_boundaries, read_plex
 from .model import Domain
@@ -28,7 +27,8 @@ from .monitors import contact_node_fields
 from .output import FieldWriter, History, write_summary
 from .problem import Problem
 from .scenes.base import REGISTRY
-from .solver import SOLVER_DEFAULTS, StepControl, TimeStepper, propose_defaults, solver_defaults_by_size
+from .solver import (SOLVER_DEFAULTS, StepControl, TimeStepper, failure_message, propose_defaults,
+                     solver_defaults_by_size)
 
 #: options PETSc reads only at finalize or start-up; never "unused"
 _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
@@ -235,7 +235,7 @@ class Run:
         self._pop("output", st, t0)
         interval = run.output_interval or scene.time.output_interval
         stepper = None
-        state = {"its": (0, 0), "wall": time.perf_counter(), "last_t": 0.0}
+        state = {"its": (0, 0), "wall": time.perf_counter(), "last_t": 0.0, "rows": 0, "step_walls": []}
 
         def write_fields(t):
             s, t1 = self._stage("output")
@@ -248,6 +248,9 @@ class Run:
             self._pop("output", s, t1)
 
         def monitor(step, t, X):
+            if state["rows"] and t == state["last_t"]:    # TS's last call after a failed step: no new state
+                return
+            state["rows"] += 1
             snes_its, ksp_its = stepper.iterations() if stepper else (0, 0)
             dn, dk = snes_its - state["its"][0], ksp_its - state["its"][1]
             state["its"] = (snes_its, ksp_its)
@@ -261,14 +264,17 @@ class Run:
                 check_unused_petsc_options()
             if step % interval == 0 or t >= control.final_time * (1 - 1e-12):
                 write_fields(t)
+            now = time.perf_counter()
+            state["step_walls"] = (state["step_walls"] + [now - state["wall"]])[-5:]
+            state["wall"] = now
             if not run.quiet and step > 0:
                 frac = t / control.final_time
-                solve_wall = time.perf_counter() - state["wall"]
-                eta = solve_wall * (1 - frac) / frac if frac > 0 else math.nan
+                eta = control.steps_left(t, dt) * sum(state["step_walls"]) / len(state["step_walls"])
                 _say(comm, f"step {step:5d}  t = {t:.4e} s  dt = {dt:.3e} s  newton {dn:2d}  "
                      f"krylov {dk:4d}  {100 * frac:5.1f} %  left ~{eta:7.1f} s")
 
-        stepper = TimeStepper(problem, control, monitor)
+        with petsc_option_errors("the solver options (-ts_*, -snes_*, -ksp_*, -pc_*)"):
+            stepper = TimeStepper(problem, control, monitor)
         st, t0 = self._stage("solve")
         state["wall"] = time.perf_counter()
         reason = stepper.solve()
@@ -286,6 +292,7 @@ class Run:
             "steps": stepper.ts.getStepNumber(), "rejected_steps": stepper.rejected,
             "snes_iterations": stepper.iterations()[0], "ksp_iterations": stepper.iterations()[1],
             "final_time": t_final,
+            "message": None if reason > 0 else failure_message(stepper.ts),
         }
         st, t0 = self._stage("output")
         summary.update(scene_monitor.report(problem, t_final))
@@ -302,9 +309,11 @@ class Run:
         summary["peak_memory_mb"] = peak_memory_mb()
         summary["pc_rebuilds_forced"] = stepper.reuse.rebuilds if stepper.reuse is not None else None
         write_summary(os.path.join(self.outdir, "summary.json"), summary, comm.rank)
+        if summary["message"]:
+            _say(comm, f"petthm: the run stopped: {summary['message']}")
         _say(comm, f"{status}: t = {t_final:.4e} s in {summary['steps']} steps "
-             f"({summary['rejected_steps']} rejected), {summary['wall_time']['total']:.2f} s; "
-             f"output in {self.outdir}")
+             f"({summary['rejected_steps']} rejected), {summary['wall_time']['total']:.2f} s, "
+             f"peak memory {summary['peak_memory_mb']['max_rank']:.0f} MB per rank; output in {self.outdir}")
         return summary
 
     @staticmethod

@@ -7,3 +7,32 @@ class InputError(Exception):
     The message names the option or file and, where it applies, the accepted
     range; the command-line driver prints it on one line and exits with 2.
     """
+
+
+class petsc_option_errors:
+    """Turn a PETSc error raised while PETSc reads its options (an unknown
+    ``-pc_type``, a value out of range such as ``-dm_refine -1``) into an
+    ``InputError`` with PETSc's own message (the last line of the error
+    stack that petsc4py puts in the exception), instead of a Python
+    traceback.  ``what`` says what was being set up ("the solver options")."""
+
+    def __init__(self, what: str):
+        self.what = what
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, tb):
+        from petsc4py import PETSc
+        if kind is not None and issubclass(kind, PETSc.Error):
+            raise InputError(f"PETSc refused {self.what}: {_petsc_message(error)}") from None
+        return False
+
+
+def _petsc_message(error) -> str:
+    """The specific message of a PETSc error: the last line of its stack
+    that is not a location ("[0] Func() at file.c:NN")."""
+    import re
+    lines = [re.sub(r"^\[\d+\]\s*", "", line).strip() for line in str(error).splitlines()[1:]]
+    lines = [s for s in lines if s and not re.search(r"\(\) at .*:\d+$", s)]
+    return lines[-1] if lines else f"PETSc error code {getattr(error, 'ierr', '?')}"

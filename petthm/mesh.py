@@ -66,9 +66,11 @@ def label_boundaries(dm: PETSc.DMPlex, parts: Mapping[str, BoundaryPredicate]) -
 
 def distribute(dm: PETSc.DMPlex) -> PETSc.DMPlex:
     """Distribute over the communicator (no overlap) and apply -dm_* options."""
+    from .errors import petsc_option_errors
     if dm.comm.size > 1:
         dm.distribute()
-    dm.setFromOptions()
+    with petsc_option_errors("the mesh options (-dm_*)"):
+        dm.setFromOptions()
     dm.setName("mesh")
     return dm
 

@@ -118,6 +118,38 @@ class StepControl:
     pc_reuse: str = "off"        # on, off, auto: on for a direct solve (PreconditionerReuse)
     pc_reuse_max_krylov: int = 30
 
+    def steps_left(self, t: float, dt: float) -> int:
+        """Steps from t to the final time when the last step was dt: each
+        next step min(dt growth, dt_max), the last one clipped (for the
+        progress line's estimate)."""
+        remaining, n = self.final_time - t, 0
+        tiny = 1e-12 * max(abs(self.final_time), 1e-300)
+        while remaining > tiny and n < 10 ** 6:
+            dt = min(dt * self.growth, self.dt_max) if dt > 0 else self.dt_initial
+            if self.growth <= 1.0 or dt >= self.dt_max:
+                return n + math.ceil(remaining / dt - 1e-9)
+            remaining -= dt
+            n += 1
+        return n
+
+
+def failure_message(ts: PETSc.TS) -> str:
+    """Why a run stopped: the TS reason, and the last SNES and KSP reasons."""
+    snes = ts.getSNES()
+    parts = [f"TS {_reason_name(PETSc.TS.ConvergedReason, ts.getConvergedReason())} at "
+             f"t = {ts.getTime():.6g} s (last step tried {ts.getTimeStep():.3g} s, "
+             f"{ts.getStepRejections()} rejected in all)",
+             f"SNES {_reason_name(PETSc.SNES.ConvergedReason, snes.getConvergedReason())} "
+             f"after {snes.getIterationNumber()} Newton iterations",
+             f"KSP {_reason_name(PETSc.KSP.ConvergedReason, snes.getKSP().getConvergedReason())}"]
+    return "; ".join(parts)
+
+
+def _reason_name(kind, value: int) -> str:
+    names = [k for k in dir(kind) if not k.startswith("_") and getattr(kind, k) == value]
+    preferred = [k for k in names if not k.endswith("_ITERATING")] or names
+    return f"{preferred[0] if preferred else 'REASON'} ({int(value)})"
+
 
 #: preconditioners that are a direct solve (``-thm_pc_reuse auto`` reuses them)
 DIRECT_PCS = ("lu", "cholesky", "redundant")
@@ -145,6 +177,10 @@ class TimeStepper:
         ts.setMaxStepRejections(8)         # at most 8 times in a row (-ts_max_reject /
         ts.setFromOptions()                # -ts_max_step_rejections override)
         ts.setErrorIfStepFails(False)
+        if not ts.getMaxTime() > 0.0:
+            raise InputError(f"option -ts_max_time = {ts.getMaxTime():g}: the end time must be > 0 s "
+                             "(or use -thm_final_time)")
+        control.final_time = ts.getMaxTime()
         self.snes = ts.getSNES()
         self.updates = SNESUpdates()
         self.snes.setUpdate(self.updates)

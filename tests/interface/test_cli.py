@@ -78,3 +78,53 @@ def test_bad_fracture_input_is_a_one_line_error(tmp_path, opts, words):
                          "-thm_scene1_fracture_size", 10, check=False)
     msg = _one_line_error(proc)
     assert all(w in msg for w in words), msg
+
+
+@pytest.mark.parametrize("opts,words", [
+    (("-pc_type", "foo"), ("PETSc refused the solver options", "PC type foo")),
+    (("-ksp_type", "gmress"), ("PETSc refused the solver options", "KSP type gmress")),
+    (("-dm_refine", "-1"), ("PETSc refused the mesh options", "-1")),
+    (("-ts_max_time", "-5"), ("-ts_max_time = -5", "> 0")),
+    (("-ts_max_time", "0"), ("-ts_max_time = 0", "> 0")),
+])
+def test_bad_petsc_option_values_are_one_line_errors(tmp_path, opts, words):
+    """Issue 15: PETSc's refusal of an option value is a one-line error with
+    PETSc's own message, not its error stack and a traceback; a TS end time
+    <= 0 is refused (it used to 'complete' after 0 steps)."""
+    proc, _ = run_petthm("heat_erfc", tmp_path, *opts, check=False)
+    msg = _one_line_error(proc)
+    assert all(w in msg for w in words), msg
+
+
+@pytest.mark.parametrize("scene,opts", [
+    ("lauwerier", ()),
+    ("penny_impermeable", ("-options_file", f"{ROOT}/options/scenes/penny_impermeable.opts",
+                           "-thm_scene2_fracture_size", 40, "-thm_scene2_well_size", 20,
+                           "-thm_scene2_layer", 0)),
+])
+def test_a_failed_first_step_fails_cleanly(tmp_path, scene, opts):
+    """Issue 15: a fracture scene whose first step cannot be solved
+    (-snes_max_it 1) retries it smaller, then stops with exit code 1,
+    status failed and a message naming the TS and SNES reasons (it used to
+    end in a ZeroDivisionError in the balance monitor, with no summary)."""
+    proc, s = run_petthm(scene, tmp_path, *opts, "-snes_max_it", 1, check=False)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert s["status"] == "failed" and s["steps"] == 0 and s["rejected_steps"] > 0
+    assert "DIVERGED_STEP_REJECTED" in s["message"] and "SNES DIVERGED_MAX_IT" in s["message"]
+    assert "the run stopped" in proc.stdout
+
+
+def test_progress_estimate_counts_the_geometric_steps():
+    """Issue 15: the steps left after step 1 of a geometric schedule (Scene
+    2: 1e3 s, x1.2, at most 2e7 s, to 1e9 s) are counted, not taken from
+    the simulated-time fraction (which overestimated the wall time 1e4x)."""
+    from petthm.solver import StepControl
+    c = StepControl(final_time=1e9, dt_initial=1e3, growth=1.2, dt_max=2e7)
+    t, dt, n = 1e3, 1e3, 0
+    while t < c.final_time * (1 - 1e-12):
+        dt = min(dt * c.growth, c.dt_max, c.final_time - t)
+        t += dt
+        n += 1
+    assert c.steps_left(1e3, 1e3) == n
+    assert StepControl(final_time=10.0, dt_initial=1.0).steps_left(3.0, 1.0) == 7
+    assert c.steps_left(c.final_time, 2e7) == 0
