@@ -81,7 +81,7 @@ def main(argv=None) -> int:
         if PETSc.COMM_WORLD.size > 1:
             PETSc.COMM_WORLD.tompi4py().Abort(1)
         raise
-    return 0 if summary["status"] == "completed" else 1
+    return {"completed": 0, "interrupted": 3}.get(summary["status"], 1)
 
 
 if __name__ == "__main__":

@@ -19,6 +19,7 @@ from petsc4py import PETSc
 
 from . import __version__, compat, params as P
 from .constraints import boundary_entries
+from . import checkpoint
 from .errors import InputError, petsc_option_errors
 from .fields import Discretisation
 from .mesh import Mesh, distribute, label_boundaries, read_plex
@@ -137,9 +138,21 @@ class Run:
         self.mpi = self.comm.tompi4py()
         run = scene.run
         self.outdir = run.output_dir or os.path.join("output", scene.name)
+        if run.restart:
+            if run.output_dir and os.path.abspath(run.output_dir) != os.path.abspath(run.restart):
+                raise InputError(f"options -thm_restart = {run.restart} and -thm_output_dir = "
+                                 f"{run.output_dir}: a restart goes on in the folder of the run it "
+                                 "continues (give -thm_restart alone)")
+            if not os.path.isdir(run.restart):
+                raise InputError(f"option -thm_restart = {run.restart}: no such folder")
+            checkpoint.check(run.restart, scene.name)
+            self.outdir = run.restart
         self.stage_wall = {}
         self.t_start = time.perf_counter()
         self.mesh_path = run.mesh_file
+        written = os.path.join(run.restart, "mesh.msh") if run.restart else ""
+        if not self.mesh_path and written and os.path.isfile(written):
+            self.mesh_path = written                  # the very mesh of the run a restart continues
         self.problem: Problem | None = None
         PETSc.Log.begin()                   # event counts and times for summary.json's solver_costs
 
@@ -227,11 +240,14 @@ class Run:
         for f in disc.fields:
             groups.setdefault((f.region, f.degree), []).append(f)
         top = {r: max(d for rr, d in groups if rr == r) for r, _ in groups}
+        resume = self._restore(problem) if run.restart else None
+        t_resume = resume["time"] if resume else None
         writers = [(FieldWriter(disc, self.outdir, d, ("fields" if r is Domain.MATRIX else "fracture")
-                                + ("" if d == top[r] else f"_p{d}"), r), fields)
+                                + ("" if d == top[r] else f"_p{d}"), r, resume_at=t_resume), fields)
                    for (r, d), fields in groups.items()]
         columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(scene.history_columns)
-        history = History(os.path.join(self.outdir, "history.csv"), columns, comm.rank)
+        history = History(os.path.join(self.outdir, "history.csv"), columns, comm.rank, append=bool(resume))
+        stop = checkpoint.StopRequest()
         self._pop("output", st, t0)
         interval = run.output_interval or scene.time.output_interval
         stepper = None
@@ -259,11 +275,20 @@ class Run:
             wall = time.perf_counter() - self.t_start
             row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk, "wall": wall}
             row.update(scene_monitor(problem, t, X))
+            if resume and t == t_resume:                  # the state the restart starts from is written
+                return
             history.write(row)
             if step == 1:
                 check_unused_petsc_options()
             if step % interval == 0 or t >= control.final_time * (1 - 1e-12):
                 write_fields(t)
+            if run.checkpoint_interval and step % run.checkpoint_interval == 0 and step > 0:
+                self._checkpoint(stepper)
+            received = stop.agreed(comm)
+            if received:
+                self._checkpoint(stepper)
+                stepper.request_stop(f"stopped by {received} at t = {t:.6g} s after step {step}; "
+                                     f"continue with -thm_restart {self.outdir}")
             now = time.perf_counter()
             state["step_walls"] = (state["step_walls"] + [now - state["wall"]])[-5:]
             state["wall"] = now
@@ -275,13 +300,19 @@ class Run:
 
         with petsc_option_errors("the solver options (-ts_*, -snes_*, -ksp_*, -pc_*)"):
             stepper = TimeStepper(problem, control, monitor)
+        if resume:
+            stepper.resume(resume["time"], resume["dt"], resume["step"])
         st, t0 = self._stage("solve")
         state["wall"] = time.perf_counter()
-        reason = stepper.solve()
+        stop.install()
+        try:
+            reason = stepper.solve()
+        finally:
+            stop.restore()
         self._pop("solve", st, t0)
         drop_unused_proposals()
         t_final = stepper.ts.getTime()
-        status = "completed" if reason > 0 else "failed"
+        status = "interrupted" if stepper.stopped else "completed" if reason > 0 else "failed"
         summary = {
             "scene": scene.name, "status": status,
             "reason": str(reason) + ("" if reason > 0 else " (TS diverged; last accepted state saved)"),
@@ -292,7 +323,7 @@ class Run:
             "steps": stepper.ts.getStepNumber(), "rejected_steps": stepper.rejected,
             "snes_iterations": stepper.iterations()[0], "ksp_iterations": stepper.iterations()[1],
             "final_time": t_final,
-            "message": None if reason > 0 else failure_message(stepper.ts),
+            "message": stepper.stopped or (None if reason > 0 else failure_message(stepper.ts)),
         }
         st, t0 = self._stage("output")
         summary.update(scene_monitor.report(problem, t_final))
@@ -301,6 +332,8 @@ class Run:
                                  "options": options_in_effect()}
         if status == "failed":
             write_fields(t_final)
+        if not stepper.stopped:
+            self._checkpoint(stepper)                     # the last accepted state
         history.close()
         stepper.destroy()
         self._pop("output", st, t0)
@@ -315,6 +348,23 @@ class Run:
              f"({summary['rejected_steps']} rejected), {summary['wall_time']['total']:.2f} s, "
              f"peak memory {summary['peak_memory_mb']['max_rank']:.0f} MB per rank; output in {self.outdir}")
         return summary
+
+    def _restore(self, problem) -> dict:
+        """Load the checkpoint of the run a restart continues (the state
+        after problem set-up: the same scales, proposals and initial
+        conditions as the original run) and drop its history rows after it."""
+        meta = checkpoint.read(self.outdir, problem.X, problem.dm, self.scene.name)
+        if self.comm.rank == 0:
+            checkpoint.truncate_history(os.path.join(self.outdir, "history.csv"), meta["time"])
+        _say(self.comm, f"restart from {os.path.join(self.outdir, checkpoint.FILE)}: "
+             f"t = {meta['time']:.6g} s, step {meta['step']}")
+        return meta
+
+    def _checkpoint(self, stepper) -> None:
+        ts = stepper.ts
+        checkpoint.write(self.outdir, self.problem.X, self.problem.dm, {
+            "scene": self.scene.name, "time": ts.getTime(), "dt": ts.getTimeStep(),
+            "step": ts.getStepNumber(), "rejected": ts.getStepRejections()})
 
     @staticmethod
     def _si_out(problem, name, t):

@@ -93,6 +93,11 @@ def set_local_section(dm: PETSc.DM, section: PETSc.Section) -> None:
         dm.setSection(section)
 
 
+def get_local_section(dm):
+    """DMGetLocalSection (named getSection in petsc4py < 3.20)."""
+    return dm.getLocalSection() if hasattr(dm, "getLocalSection") else dm.getSection()
+
+
 # --------------------------------------------------------------------------
 # COO assembly
 # --------------------------------------------------------------------------

@@ -64,15 +64,45 @@ def label_boundaries(dm: PETSc.DMPlex, parts: Mapping[str, BoundaryPredicate]) -
     dm.removeLabel("thm_boundary_all")
 
 
+#: the attribute of a distributed DM that holds each local point's number in
+#: the serial mesh it was distributed from (``original_points``)
+ORIGINAL_POINTS = "petthm_original_points"
+
+
 def distribute(dm: PETSc.DMPlex) -> PETSc.DMPlex:
-    """Distribute over the communicator (no overlap) and apply -dm_* options."""
+    """Distribute over the communicator (no overlap) and apply -dm_* options.
+    Each local point's number in the serial mesh is kept on the DM
+    (``original_points``): a checkpoint keys its values by it, so that a
+    restart does not depend on the partition (the partitioners are not
+    deterministic from run to run) nor on the rank count."""
     from .errors import petsc_option_errors
+    original = np.arange(*dm.getChart())
     if dm.comm.size > 1:
-        dm.distribute()
+        sf = dm.distribute()
+        if sf is not None:
+            _, leaves, remote = sf.getGraph()
+            original = np.full(dm.getChart()[1] - dm.getChart()[0], -1, dtype=np.int64)
+            original[np.arange(len(remote)) if leaves is None else leaves] = np.asarray(remote)[:, 1]
+    chart = dm.getChart()
+    opts = PETSc.Options()
+    ours = not opts.hasName("dm_distribute")
+    if ours:                                      # PETSc 3.18 would distribute the distributed mesh again
+        opts.setValue("dm_distribute", "0")
     with petsc_option_errors("the mesh options (-dm_*)"):
         dm.setFromOptions()
+    if ours:
+        opts.delValue("dm_distribute")
+    if dm.getChart() != chart:                    # -dm_refine: new points, no serial number
+        original = np.full(dm.getChart()[1] - dm.getChart()[0], -1, dtype=np.int64)
+    dm.setAttr(ORIGINAL_POINTS, original)
     dm.setName("mesh")
     return dm
+
+
+def original_points(dm: PETSc.DMPlex) -> np.ndarray:
+    """Each local point's number in the serial mesh (-1: none; see ``distribute``)."""
+    out = dm.getAttr(ORIGINAL_POINTS)
+    return np.arange(*dm.getChart()) if out is None else out
 
 
 class _VertexTopology:

@@ -25,13 +25,15 @@ TOPOLOGY = {(1, 1): ("Polyline", 2), (1, 2): ("Edge_3", 3),
 class History:
     """history.csv: one row per accepted step, written by rank 0 as it goes."""
 
-    def __init__(self, path: str, columns: Sequence[str], rank: int):
+    def __init__(self, path: str, columns: Sequence[str], rank: int, append: bool = False):
         self.columns = list(columns)
         self._file = None
         if rank == 0:
-            self._file = open(path, "w", newline="")
+            append = append and os.path.isfile(path)
+            self._file = open(path, "a" if append else "w", newline="")
             self._writer = csv.writer(self._file)
-            self._writer.writerow(self.columns)
+            if not append:
+                self._writer.writerow(self.columns)
             self._file.flush()
 
     def write(self, row: dict) -> None:
@@ -62,7 +64,7 @@ class FieldWriter:
     on the fracture surface (the - faces), one degree for all."""
 
     def __init__(self, disc: Discretisation, directory: str, degree: int, stem: str = "fields",
-                 region: Domain = Domain.MATRIX):
+                 region: Domain = Domain.MATRIX, resume_at: float | None = None):
         mesh = disc.mesh
         self.comm = mesh.dm.comm.tompi4py()
         self.rank = self.comm.rank
@@ -87,11 +89,32 @@ class FieldWriter:
         if self.rank == 0:
             import h5py
             os.makedirs(directory, exist_ok=True)
-            with h5py.File(self.h5path, "w") as h5:
-                h5["mesh/topology"] = np.concatenate(conn_all).astype(np.int64)
-                h5["mesh/geometry"] = xyz
             self.ncells = sum(len(c) for c in conn_all)
+            if resume_at is not None and os.path.isfile(self.h5path):
+                self._resume(resume_at)
+            else:
+                with h5py.File(self.h5path, "w") as h5:
+                    h5["mesh/topology"] = np.concatenate(conn_all).astype(np.int64)
+                    h5["mesh/geometry"] = xyz
         dmo.destroy()
+
+    def _resume(self, t: float) -> None:
+        """Go on with the series of an earlier run (restart): keep its steps
+        up to time t, drop the later ones (rank 0)."""
+        import h5py
+        with h5py.File(self.h5path, "a") as h5:
+            times = list(h5.attrs.get("times", []))
+            keep = sum(1 for s in times if s <= t * (1 + 1e-12) + 1e-300)
+            for name in list(h5.get("fields", {})):
+                for k in list(h5["fields"][name]):
+                    if int(k) >= keep:
+                        del h5["fields"][name][k]
+            h5.attrs["times"] = times[:keep]
+            for k, s in enumerate(times[:keep]):
+                data = [(name, h5["fields"][name][str(k)]) for name in h5.get("fields", {})
+                        if str(k) in h5["fields"][name]]
+                entries = [(name, 1 if d.ndim == 1 else d.shape[1]) for name, d in data]
+                self._steps.append((s, entries))
 
     def _gather_nodal(self, values: np.ndarray) -> np.ndarray | None:
         parts = self.comm.gather((self.local_gid, np.asarray(values)), root=0)
@@ -117,6 +140,7 @@ class FieldWriter:
                         arr = np.column_stack([arr, np.zeros(len(arr))])
                     h5[f"fields/{name}/{k}"] = arr
                     entries.append((name, arr.shape[1] if arr.ndim == 2 else 1))
+                h5.attrs["times"] = [s for s, _ in self._steps] + [t]
             self._steps.append((t, entries))
             self._write_xdmf()
         else:

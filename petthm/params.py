@@ -187,6 +187,10 @@ class RunParams:
     dt_max: float = param(0.0, "s", "largest time step (0: scene default)", lo=0.0)
     output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0)
     quiet: bool = param(False, "-", "no per-step progress line")
+    checkpoint_interval: int = param(10, "steps", "write checkpoint.h5 every N accepted steps (0: only "
+                                     "at the end and when a signal stops the run)", lo=0)
+    restart: str = param("", "-", "continue the run whose output folder this is, from its "
+                         "checkpoint.h5 (same options and rank count; output goes on in that folder)")
     pc_reuse: str = param("auto", "-", "reuse the preconditioner across Newton iterations and time "
                           "steps, rebuilt when the extra Krylov iterations have cost a set-up or a step "
                           "fails: on, off, or auto (on for a direct solve without friction)",

@@ -204,6 +204,7 @@ class TimeStepper:
         ts.setMonitor(self._monitor)
         self.rejected = 0
         self.error = None
+        self.stopped: str | None = None
         self._last_dt_cut = None
 
     def _set_field_splits(self, pc):
@@ -263,7 +264,26 @@ class TimeStepper:
                 _abort_all(ts.comm,
                            f"rank {ts.comm.rank}: the step monitor failed at step {step}, t = {t:.6g} s")
             self.error = e
-            ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_USER)
+            self._stop_now()
+
+    def resume(self, t: float, dt: float, step: int) -> None:
+        """Continue a run from a checkpoint: its time, next step and step number."""
+        self.ts.setTime(t)
+        self.ts.setTimeStep(dt)
+        self.ts.setStepNumber(step)
+
+    def request_stop(self, message: str) -> None:
+        """Stop after the current step (from the monitor; collective): the
+        run ends with status interrupted and ``message``."""
+        self.stopped = message
+        self._stop_now()
+
+    def _stop_now(self) -> None:
+        """End TSSolve after the step just accepted: TS resets a converged
+        reason set in a monitor when it starts the next step, but honours
+        its step limit."""
+        self.ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_USER)
+        self.ts.setMaxSteps(self.ts.getStepNumber())
 
     def solve(self) -> int:
         """Run to the final time; returns TS converged reason (negative: failed)."""

@@ -1,0 +1,128 @@
+"""Checkpoint and restart (issue 15): a run killed (kill -9) or stopped by
+a signal continues with -thm_restart to the uninterrupted run's final
+state, on the same or another rank count (values are keyed by the serial
+mesh's points, not by the partition)."""
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import MPI_ENV, ROOT, run_petthm
+
+LAUWERIER = ("lauwerier", ("-thm_final_time", 1e6))
+SCENE2 = ("penny_impermeable", ("-options_file", f"{ROOT}/options/scenes/penny_impermeable.opts",
+                                "-thm_scene2_fracture_size", 40, "-thm_scene2_well_size", 20,
+                                "-thm_scene2_layer", 0, "-thm_final_time", 1e7))
+
+
+def _start(scene, outdir, options, ranks=1):
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", str(outdir), "-thm_quiet",
+           *map(str, options)]
+    if ranks > 1:
+        cmd = ["mpiexec", "-n", str(ranks)] + cmd
+    return subprocess.Popen(cmd, cwd=ROOT, env=dict(os.environ, **MPI_ENV), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for(path, rows=0, timeout=300):
+    """Until ``path`` exists (and, for a CSV, has more than ``rows`` rows)."""
+    end = time.time() + timeout
+    while time.time() < end:
+        if os.path.exists(path) and (not rows or sum(1 for _ in open(path)) > rows + 1):
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"{path} did not appear")
+
+
+def _final_state(outdir):
+    """The checkpoint's values in the order of the serial mesh's points (any rank count)."""
+    with h5py.File(os.path.join(outdir, "checkpoint.h5"), "r") as h5:
+        point, ndof, value = (np.concatenate([h5[name][k][...] for k in sorted(h5[name], key=int)])
+                              for name in ("point", "ndof", "value"))
+        meta = dict(h5.attrs)
+    blocks = np.split(value, np.cumsum(ndof)[:-1])
+    return np.concatenate([blocks[i] for i in np.argsort(point)]), meta
+
+
+def _times(outdir):
+    return [float(r["time"]) for r in csv.DictReader(open(os.path.join(outdir, "history.csv")))]
+
+
+@pytest.mark.parametrize("scene,options", [LAUWERIER, SCENE2], ids=["lauwerier", "scene2"])
+def test_kill_9_then_restart_gives_the_uninterrupted_run(tmp_path, scene, options):
+    """A fracture TH scene and a contact scene (Scene 2: u, lam, pf, Tf,
+    Tm), killed with SIGKILL after their first checkpoint (every 5 steps):
+    -thm_restart continues to the uninterrupted run's final state (1e-10)
+    and history (the rows after the checkpoint are written again, once)."""
+    _, ref = run_petthm(scene, tmp_path / "ref", *options)
+    out = tmp_path / "killed"
+    proc = _start(scene, out, (*options, "-thm_checkpoint_interval", 5))
+    _wait_for(out / "checkpoint.h5")
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=60)
+    _, s = run_petthm(scene, out, "-thm_restart", out, *options)
+    x_ref, meta_ref = _final_state(tmp_path / "ref")
+    x, meta = _final_state(out)
+    print(scene, "relative difference", np.abs(x - x_ref).max() / np.abs(x_ref).max())
+    assert s["status"] == "completed" and meta["time"] == meta_ref["time"]
+    assert np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
+    assert _times(out) == _times(tmp_path / "ref")
+
+
+def test_signal_checkpoints_and_stops_then_restart_on_two_ranks_or_one(tmp_path):
+    """2 ranks: a signal stops the run after its step with a checkpoint,
+    status interrupted and exit code 3 (SIGUSR1: Open MPI's mpiexec
+    forwards it to the ranks, where SIGTERM makes it kill the job; under
+    srun SIGTERM reaches the ranks themselves).  The restart on 2 ranks, and
+    one on 1 rank from a copy of the folder, reach the uninterrupted 2-rank
+    run's final state (1e-10: the partitions differ from run to run)."""
+    import json
+    import shutil
+    scene, options = LAUWERIER
+    run_petthm(scene, tmp_path / "ref", *options, ranks=2)
+    out = tmp_path / "stopped"
+    proc = _start(scene, out, (*options, "-thm_checkpoint_interval", 0), ranks=2)
+    _wait_for(out / "history.csv", rows=5)
+    proc.send_signal(signal.SIGUSR1)
+    stdout, stderr = proc.communicate(timeout=120)
+    s = json.load(open(out / "summary.json"))
+    assert proc.returncode == 3, stdout + stderr
+    assert s["status"] == "interrupted" and "SIGUSR1" in s["message"] and "Traceback" not in stderr
+    assert os.path.exists(out / "checkpoint.h5") and s["final_time"] < 1e6
+    shutil.copytree(out, tmp_path / "serial")
+    x_ref, _ = _final_state(tmp_path / "ref")
+    for folder, ranks in ((out, 2), (tmp_path / "serial", 1)):
+        _, s = run_petthm(scene, folder, "-thm_restart", folder, *options, ranks=ranks)
+        x, _ = _final_state(folder)
+        print(ranks, "rank(s): relative difference", np.abs(x - x_ref).max() / np.abs(x_ref).max())
+        assert s["status"] == "completed"
+        assert np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
+
+
+def test_sigterm_stops_a_serial_run(tmp_path):
+    """SIGTERM on one rank: interrupted, exit code 3, a checkpoint."""
+    scene, options = LAUWERIER
+    out = tmp_path / "stopped"
+    proc = _start(scene, out, options)
+    _wait_for(out / "history.csv", rows=3)
+    proc.send_signal(signal.SIGTERM)
+    proc.communicate(timeout=120)
+    import json
+    s = json.load(open(out / "summary.json"))
+    assert proc.returncode == 3 and s["status"] == "interrupted" and "SIGTERM" in s["message"]
+    assert os.path.exists(out / "checkpoint.h5")
+
+
+def test_restart_errors_are_one_line(tmp_path):
+    """No checkpoint in the folder, or another scene's checkpoint."""
+    proc, _ = run_petthm("lauwerier", tmp_path, "-thm_restart", tmp_path, check=False)
+    assert proc.returncode == 2 and "no checkpoint.h5" in proc.stderr
+    run_petthm("heat_erfc", tmp_path / "heat", "-thm_final_time", 1e3)
+    proc, _ = run_petthm("lauwerier", tmp_path / "heat", "-thm_restart", tmp_path / "heat", check=False)
+    assert proc.returncode == 2 and "scene heat_erfc" in proc.stderr
