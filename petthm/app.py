@@ -312,7 +312,8 @@ class Run:
         self._pop("solve", st, t0)
         drop_unused_proposals()
         t_final = stepper.ts.getTime()
-        status = "interrupted" if stepper.stopped else "completed" if reason > 0 else "failed"
+        failed = reason <= 0 or stepper.failure is not None
+        status = "interrupted" if stepper.stopped else "failed" if failed else "completed"
         summary = {
             "scene": scene.name, "status": status,
             "reason": str(reason) + ("" if reason > 0 else " (TS diverged; last accepted state saved)"),
@@ -323,7 +324,8 @@ class Run:
             "steps": stepper.ts.getStepNumber(), "rejected_steps": stepper.rejected,
             "snes_iterations": stepper.iterations()[0], "ksp_iterations": stepper.iterations()[1],
             "final_time": t_final,
-            "message": stepper.stopped or (None if reason > 0 else failure_message(stepper.ts)),
+            "message": stepper.stopped or stepper.failure or
+            (None if reason > 0 else failure_message(stepper.ts)),
         }
         st, t0 = self._stage("output")
         summary.update(scene_monitor.report(problem, t_final))

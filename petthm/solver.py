@@ -118,6 +118,17 @@ class StepControl:
     pc_reuse: str = "off"        # on, off, auto: on for a direct solve (PreconditionerReuse)
     pc_reuse_max_krylov: int = 30
 
+    def dt_floor(self) -> float:
+        """The smallest step a run may take before its end: 1e-10 of the end
+        time and 1e-6 of the first step (a step cut that far by rejections
+        does not recover, and a run on such steps never ends)."""
+        return min(1e-10 * self.final_time, 1e-6 * self.dt_initial)
+
+    def collapsed(self, dt: float, t: float) -> bool:
+        """Whether the step just taken (ending at t) is below ``dt_floor``;
+        the last step, clipped to land on the end time, may be shorter."""
+        return dt < self.dt_floor() and t < self.final_time * (1 - 1e-12)
+
     def steps_left(self, t: float, dt: float) -> int:
         """Steps from t to the final time when the last step was dt: each
         next step min(dt growth, dt_max), the last one clipped (for the
@@ -205,6 +216,7 @@ class TimeStepper:
         self.rejected = 0
         self.error = None
         self.stopped: str | None = None
+        self.failure: str | None = None          # why the run was stopped as failed (not a TS reason)
         self._last_dt_cut = None
 
     def _set_field_splits(self, pc):
@@ -236,6 +248,11 @@ class TimeStepper:
         PETSc.garbage_cleanup(ts.comm)
         c = self.control
         t = ts.getTime()
+        if c.collapsed(ts.getTimeStep(), t):
+            self.failure = (f"the time step collapsed to {ts.getTimeStep():.3g} s at t = {t:.6g} s "
+                            f"(below {c.dt_floor():.3g} s, after rejected steps): the run cannot go on")
+            self._stop_now()
+            return
         dt = min(ts.getTimeStep() * c.growth, c.dt_max)
         if self._last_dt_cut is not None:        # resume the growth sequence after a hit
             dt = min(self._last_dt_cut, c.dt_max)

@@ -128,3 +128,18 @@ def test_progress_estimate_counts_the_geometric_steps():
     assert c.steps_left(1e3, 1e3) == n
     assert StepControl(final_time=10.0, dt_initial=1.0).steps_left(3.0, 1.0) == 7
     assert c.steps_left(c.final_time, 2e7) == 0
+
+
+def test_a_collapsed_time_step_is_a_failure():
+    """Issue 15: a run whose step was cut by rejections to below 1e-10 of
+    the end time (and 1e-6 of the first step) is stopped as failed instead
+    of going on for ever on such steps (seen: friction_patch, steps of
+    1e-11 s in a 1 s run); the last step, clipped to the end time, may be
+    short."""
+    from petthm.solver import StepControl
+    c = StepControl(final_time=1.0, dt_initial=0.2)
+    assert c.dt_floor() == pytest.approx(1e-10)
+    assert c.collapsed(1e-11, 0.5) and not c.collapsed(1e-9, 0.5)
+    assert not c.collapsed(1e-11, 1.0)                   # landing on the end time
+    long_run = StepControl(final_time=1e9, dt_initial=1e-3)
+    assert not long_run.collapsed(1e-3, 1e-3)             # a small first step is not a collapse
