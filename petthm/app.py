@@ -175,9 +175,17 @@ class Run:
         if not path:
             path = os.path.join(self.outdir, "mesh.msh")
             size = run.mesh_size or scene.time.mesh_size
+            error = None
             if self.comm.rank == 0:
-                scene.generate_mesh(path, size)
-            self.mpi.barrier()
+                from .meshing import set_cell_limit
+                set_cell_limit(run.max_cells)
+                try:
+                    scene.generate_mesh(path, size)
+                except InputError as e:
+                    error = str(e)
+            error = self.mpi.bcast(error, root=0)     # every rank stops alike
+            if error:
+                raise InputError(error)
         dm = read_plex(path, self.comm)
         label_boundaries(dm, scene.boundaries())
         from .fracture import split_fractures

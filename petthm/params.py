@@ -187,6 +187,8 @@ class RunParams:
     dt_max: float = param(0.0, "s", "largest time step (0: scene default)", lo=0.0)
     output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0)
     quiet: bool = param(False, "-", "no per-step progress line")
+    max_cells: int = param(5_000_000, "cells", "refuse a generated mesh that would have more cells "
+                           "than this (checked before meshing, from the far-field size)", lo=1)
     checkpoint_interval: int = param(10, "steps", "write checkpoint.h5 every N accepted steps (0: only "
                                      "at the end and when a signal stops the run)", lo=0)
     restart: str = param("", "-", "continue the run whose output folder this is, from its "

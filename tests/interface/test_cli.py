@@ -143,3 +143,39 @@ def test_a_collapsed_time_step_is_a_failure():
     assert not c.collapsed(1e-11, 1.0)                   # landing on the end time
     long_run = StepControl(final_time=1e9, dt_initial=1e-3)
     assert not long_run.collapsed(1e-3, 1e-3)             # a small first step is not a collapse
+
+
+@pytest.mark.parametrize("size,ranks", [(1e-6, 1), (1e-9, 1), (1e-6, 2)])
+def test_a_mesh_beyond_the_cell_limit_is_refused_before_meshing(tmp_path, size, ranks):
+    """Issue 15: contact_patch -thm_mesh_size 1e-6 used to hang in gmsh and
+    1e-9 to give a coarser mesh silently; now a one-line error names the
+    size, the lower bound on the cells and -thm_max_cells (on every rank)."""
+    proc, _ = run_petthm("contact_patch", tmp_path, "-thm_mesh_size", size, ranks=ranks, check=False)
+    if ranks == 1:
+        msg = _one_line_error(proc)
+    else:                                    # mpiexec adds its own report of the exit code
+        mine = [line for line in proc.stderr.splitlines() if line.startswith("petthm")]
+        assert proc.returncode == 2 and len(mine) == 1 and "Traceback" not in proc.stderr, proc.stderr
+        msg = mine[0]
+    assert f"mesh size {size:g} m" in msg and "-thm_max_cells" in msg
+
+
+@pytest.mark.parametrize("dim,size", [(2, 0.1), (2, 0.02), (3, 0.25), (3, 0.1)])
+def test_fewest_cells_is_a_lower_bound(dim, size):
+    """The bound the cell limit uses is below gmsh's count for a unit
+    square or cube at that largest size (measured: 161 against 1140
+    tetrahedra at 0.25)."""
+    import gmsh
+    from petthm.meshing import fewest_cells
+    gmsh.initialize(["gmsh"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        (gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1) if dim == 3 else gmsh.model.occ.addRectangle(0, 0, 0, 1, 1))
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.model.mesh.generate(dim)
+        cells = len(gmsh.model.mesh.getElements(dim)[1][0])
+    finally:
+        gmsh.finalize()
+    print(dim, size, "bound", fewest_cells(1.0, size, dim), "gmsh", cells)
+    assert fewest_cells(1.0, size, dim) < cells
