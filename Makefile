@@ -7,8 +7,9 @@ MPI_ENV := OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rm
 setup:
 	@bash scripts/setup_env.sh
 
+# The paper's Scene 2 on a coarse mesh to 1e9 s, with its Figs. 5 and 6 (output/demo)
 demo: setup
-	$(MPI_ENV) $(PY) -m petthm heat_erfc -options_file options/scenes/heat_erfc.opts
+	$(MPI_ENV) $(PY) scripts/scene2_study.py --demo
 
 test: setup
 	bash scripts/run_tests.sh
