@@ -42,6 +42,23 @@ def _fail(msg: str, rank: int) -> int:
     return 2
 
 
+def _bad_options_line(path: str) -> str | None:
+    """A one-line error for the first line of an options file that PETSc
+    would refuse at start-up (a line is '-name [value]' or 'alias ...'; '#'
+    starts a comment), or None."""
+    try:
+        with open(path, errors="replace") as f:
+            lines = f.read().splitlines()
+    except OSError as e:
+        return f"options file '{path}' cannot be read ({e.strerror}) (-options_file)"
+    for n, line in enumerate(lines, 1):
+        text = line.split("#", 1)[0].strip()
+        if text and not text.startswith(("-", "alias", "!", "%")):
+            return (f"options file '{path}' line {n}: '{text[:40]}' is not an option "
+                    "(a line is '-name [value]'; '#' starts a comment) (-options_file)")
+    return None
+
+
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     scene = argv[0] if argv and not argv[0].startswith("-") else None
@@ -63,8 +80,15 @@ def main(argv=None) -> int:
             if i + 1 >= len(rest) or not os.path.isfile(rest[i + 1]):
                 name = rest[i + 1] if i + 1 < len(rest) else ""
                 return _fail(f"options file '{name}' does not exist (-options_file)", rank)
+            bad = _bad_options_line(rest[i + 1])
+            if bad:
+                return _fail(bad, rank)
     import petsc4py
-    petsc4py.init([sys.argv[0]] + rest)
+    try:
+        petsc4py.init([sys.argv[0]] + rest)          # PETSc reads the options files here
+        from petsc4py import PETSc  # noqa: F401
+    except Exception as e:           # petsc4py.PETSc.Error (the module may not be there to name it)
+        return _fail(f"PETSc could not start with these options (error {e})", rank)
     from .app import run_scene
     from .errors import InputError
     from .scenes import load_all

@@ -169,24 +169,21 @@ class Run:
     def build_mesh(self) -> Mesh:
         scene, run = self.scene, self.scene.run
         st, t0 = self._stage("mesh")
-        if self.comm.rank == 0:
-            os.makedirs(self.outdir, exist_ok=True)
+        self._on_rank0(lambda: os.makedirs(self.outdir, exist_ok=True), OSError,
+                       lambda e: f"option -thm_output_dir = {self.outdir}: the folder cannot be created "
+                                 f"({e.strerror or e})")
         path = self.mesh_path
         if not path:
             path = os.path.join(self.outdir, "mesh.msh")
             size = run.mesh_size or scene.time.mesh_size
-            error = None
-            if self.comm.rank == 0:
-                from .meshing import set_cell_limit
+            from .meshing import set_cell_limit
+
+            def generate():
                 set_cell_limit(run.max_cells)
-                try:
-                    scene.generate_mesh(path, size)
-                except InputError as e:
-                    error = str(e)
-            error = self.mpi.bcast(error, root=0)     # every rank stops alike
-            if error:
-                raise InputError(error)
-        dm = read_plex(path, self.comm)
+                scene.generate_mesh(path, size)
+            self._on_rank0(generate, InputError, str)
+        with petsc_option_errors(f"the mesh file '{path}'"):
+            dm = read_plex(path, self.comm)
         label_boundaries(dm, scene.boundaries())
         from .fracture import split_fractures
         dm, _ = split_fractures(dm)
@@ -194,6 +191,19 @@ class Run:
         self._pop("mesh", st, t0)
         self.mesh_path = path
         return mesh
+
+    def _on_rank0(self, action, errors, message) -> None:
+        """Run ``action`` on rank 0; an exception of type ``errors`` becomes
+        an ``InputError`` (``message(exception)``) on every rank alike."""
+        error = None
+        if self.comm.rank == 0:
+            try:
+                action()
+            except errors as e:
+                error = message(e)
+        error = self.mpi.bcast(error, root=0)
+        if error:
+            raise InputError(error)
 
     def _check_fractures(self, mesh: Mesh, model) -> None:
         wants = any(f.region is Domain.FRACTURE for f in model.fields)

@@ -179,3 +179,34 @@ def test_fewest_cells_is_a_lower_bound(dim, size):
         gmsh.finalize()
     print(dim, size, "bound", fewest_cells(1.0, size, dim), "gmsh", cells)
     assert fewest_cells(1.0, size, dim) < cells
+
+
+def test_a_garbage_options_file_is_a_one_line_error(tmp_path):
+    """Issue 15: an options file with a line PETSc cannot parse used to end
+    in PETSc's error banner and a traceback."""
+    bad = tmp_path / "bad.opts"
+    bad.write_text("-thm_final_time 10\ngarbage %%% ]]]\n")
+    proc, _ = run_petthm("heat_erfc", tmp_path / "out", "-options_file", bad, check=False)
+    msg = _one_line_error(proc)
+    assert "bad.opts' line 2" in msg and "garbage" in msg
+
+
+def test_a_corrupt_mesh_file_is_a_one_line_error(tmp_path):
+    """Issue 15: a .msh file gmsh's reader refuses (it used to be a traceback)."""
+    msh = tmp_path / "corrupt.msh"
+    msh.write_text("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\nxx\n")
+    proc, _ = run_petthm("heat_erfc", tmp_path / "out", "-thm_mesh_file", msh, check=False)
+    msg = _one_line_error(proc)
+    assert "corrupt.msh" in msg and "Gmsh" in msg
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_an_output_folder_that_cannot_be_created_is_an_error(tmp_path, ranks):
+    """Issue 15: -thm_output_dir under a file (it used to be a traceback;
+    on 2 ranks every rank stops alike)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    proc, _ = run_petthm("heat_erfc", blocker / "out", ranks=ranks, check=False)
+    mine = [line for line in proc.stderr.splitlines() if line.startswith("petthm")]
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
+    assert len(mine) == 1 and "-thm_output_dir" in mine[0] and "cannot be created" in mine[0]
