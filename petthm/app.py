@@ -12,6 +12,7 @@ needs such a mesh, and one without fracture physics refuses it.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 
@@ -184,13 +185,29 @@ class Run:
             self._on_rank0(generate, InputError, str)
         with petsc_option_errors(f"the mesh file '{path}'"):
             dm = read_plex(path, self.comm)
-        label_boundaries(dm, scene.boundaries())
+        with self._user_mesh_fits(dm.getDimension()):
+            label_boundaries(dm, scene.boundaries())
         from .fracture import split_fractures
         dm, _ = split_fractures(dm)
         mesh = Mesh(distribute(dm))
         self._pop("mesh", st, t0)
         self.mesh_path = path
         return mesh
+
+    @contextlib.contextmanager
+    def _user_mesh_fits(self, dim: int):
+        """With a user's mesh file (-thm_mesh_file): a scene whose boundaries
+        or physics cannot be set up on it (another dimension, a missing
+        physical group) is an ``InputError`` naming the file, not a traceback
+        from deep inside the set-up.  The scene's own meshes always fit."""
+        try:
+            yield
+        except (ValueError, IndexError, AttributeError, KeyError) as e:
+            if not self.scene.run.mesh_file:
+                raise
+            raise InputError(f"mesh '{self.mesh_path}' ({dim}D) does not fit scene {self.scene.name} "
+                             f"({type(e).__name__}: {e}); use a mesh of the scene's dimension and physical "
+                             "groups (-thm_mesh_file), or none for the scene's own") from None
 
     def _on_rank0(self, action, errors, message) -> None:
         """Run ``action`` on rank 0; an exception of type ``errors`` becomes
@@ -217,7 +234,8 @@ class Run:
     def setup(self, mesh: Mesh):
         scene, run = self.scene, self.scene.run
         st, t0 = self._stage("setup")
-        setup = scene.build(mesh, run.fe_degree)
+        with self._user_mesh_fits(mesh.dim):
+            setup = scene.build(mesh, run.fe_degree)
         model = setup.model
         self._check_fractures(mesh, model)
         regions = {Domain.FRACTURE: mesh.fracture} if mesh.fracture is not None else {}
@@ -325,6 +343,9 @@ class Run:
         stop.install()
         try:
             reason = stepper.solve()
+        except InputError:             # raised on every rank alike (a solver option, -vi_groups)
+            stepper.destroy()          # now: a Python PC left mid-set-up crashed PETSc's exit
+            raise
         finally:
             stop.restore()
         self._pop("solve", st, t0)

@@ -210,3 +210,27 @@ def test_an_output_folder_that_cannot_be_created_is_an_error(tmp_path, ranks):
     mine = [line for line in proc.stderr.splitlines() if line.startswith("petthm")]
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     assert len(mine) == 1 and "-thm_output_dir" in mine[0] and "cannot be created" in mine[0]
+
+
+def test_a_mesh_that_does_not_fit_the_scene_is_a_one_line_error(tmp_path):
+    """Issue 15: a fracture scene given a mesh without fractures, a scene
+    without fracture physics given a split mesh, and a scene whose set-up
+    fails on a user's mesh of another dimension: one-line errors naming the
+    mesh file (the last used to be an AttributeError traceback)."""
+    run_petthm("heat_mms", tmp_path / "plain3d", "-thm_mms_dim", 3, "-thm_mesh_size", 0.5)
+    run_petthm("contact_patch", tmp_path / "cracked", "-thm_contact_dim", 2, "-thm_final_time", 0.25)
+    plain, cracked = tmp_path / "plain3d" / "mesh.msh", tmp_path / "cracked" / "mesh.msh"
+    cases = [("contact_patch", plain, "has no fracture"), ("heat_mms", cracked, "has fractures"),
+             ("lauwerier", plain, "does not fit scene lauwerier")]
+    for scene, mesh, words in cases:
+        proc, _ = run_petthm(scene, tmp_path / f"{scene}_out", "-thm_mesh_file", mesh, check=False)
+        msg = _one_line_error(proc)
+        assert words in msg and str(mesh) in msg, msg
+
+
+def test_a_block_recipe_that_leaves_out_a_field_is_an_error(tmp_path):
+    """-vi_groups must place every field of the scene in a split."""
+    proc, _ = run_petthm("contact_patch", tmp_path, "-thm_contact_dim", 2, "-options_file",
+                         f"{ROOT}/options/solvers/block.opts", "-vi_groups", "mech=u", check=False)
+    msg = _one_line_error(proc)
+    assert "-vi_groups = mech=u leaves out the field(s) lam" in msg
