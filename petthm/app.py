@@ -185,6 +185,10 @@ class Run:
             self._on_rank0(generate, InputError, str)
         with petsc_option_errors(f"the mesh file '{path}'"):
             dm = read_plex(path, self.comm)
+        want, option = scene.mesh_dimension()
+        if want and dm.getDimension() != want:
+            raise InputError(f"mesh '{path}' is {dm.getDimension()}D, but scene {scene.name} is {want}D"
+                             + (f" (option -{option} = {want})" if option else ""))
         with self._user_mesh_fits(dm.getDimension()):
             label_boundaries(dm, scene.boundaries())
         from .fracture import split_fractures

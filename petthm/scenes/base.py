@@ -107,6 +107,7 @@ class Scene:
     parameters: tuple = ()
     time: TimeDefaults = TimeDefaults(1.0, 0.1)
     history_columns: tuple = ()
+    dimension: int | None = None       # the space dimension of a scene without a -thm_*_dim option
 
     def __init__(self, run: P.RunParams, p: Parameters):
         self.run = run
@@ -125,6 +126,16 @@ class Scene:
     def output_dir(self) -> str:
         import os
         return self.run.output_dir or os.path.join("output", self.name)
+
+    def mesh_dimension(self) -> tuple[int | None, str]:
+        """(the space dimension the scene needs, the option that sets it or
+        ""): a parameter named ``*_dim`` of the scene, else ``dimension``
+        (None: not declared)."""
+        import dataclasses
+        for f in dataclasses.fields(self.p):
+            if f.name.endswith("_dim"):
+                return int(getattr(self.p, f.name)), P.option_name(f)
+        return self.dimension, ""
 
     # hooks ------------------------------------------------------------------
     def boundaries(self) -> dict[str, Callable[[np.ndarray], np.ndarray]]:

@@ -398,6 +398,7 @@ class _CrackScene(Scene):
 @register
 class PartialOpening(_CrackScene):
     name = "partial_opening"
+    dimension = 2
     description = "crack under compression, centre pressurised above closure: open centre, closed rim"
     parameters = (mt.group("Rock", mt.ELASTIC), mt.group("Contact", mt.CONTACT, **mt.FRICTIONLESS),
                   PARTIAL_LOADS, PartialOpeningParams)
@@ -465,6 +466,7 @@ class _InflationMonitor(_ProfileMonitor):
 @register
 class FractureInflation(_CrackScene):
     name = "fracture_inflation"
+    dimension = 2
     description = "water injected at the centre of a closed crack: aperture from contact and opening, da/dt"
     parameters = (mt.group("Rock", mt.ELASTIC),
                   mt.group("Fracture", mt.JOINT + mt.CONTACT, fracture_aperture=0.6e-3, **mt.FRICTIONLESS),

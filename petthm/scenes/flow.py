@@ -151,6 +151,7 @@ class _RadialMonitor(Monitor):
 @register
 class RadialFlow(Scene):
     name = "radial_flow"
+    dimension = 3
     description = "point injector in a disc fracture: p = p_R + Q/(2 pi T_h) ln(R/r) (verification.md 3b)"
     parameters = (mt.group("Fluid", ("fluid_viscosity", "fluid_compressibility"), fluid_compressibility=0.0),
                   mt.group("Fracture", ("fracture_aperture",), fracture_aperture=2e-4),
@@ -245,6 +246,7 @@ class _LeakoffMonitor(Monitor):
 @register
 class Leakoff1D(Scene):
     name = "leakoff_1d"
+    dimension = 2
     description = "fracture pressure step: cumulative leakoff 4 dp S L sqrt(c t/pi) (both faces)"
     parameters = (mt.group("Fluid", ("fluid_viscosity", "fluid_compressibility")),
                   mt.group("Rock", ("rock_permeability",), rock_permeability=(1e-15,)),

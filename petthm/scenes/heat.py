@@ -184,6 +184,7 @@ class _ErfcMonitor(Monitor):
 @register
 class HeatErfc(Scene):
     name = "heat_erfc"
+    dimension = 2
     description = "1D transient conduction into a half-space (verification.md 7a), graded mesh"
     parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT),
                   mt.group("Initial and surface temperature", ("initial_temperature", "surface_temperature")),
@@ -256,6 +257,7 @@ class _ExtremesMonitor(Monitor):
 @register
 class HeatAdvection(Scene):
     name = "heat_advection"
+    dimension = 2
     description = "cold front advected at cell Peclet >= 100 (SUPG boundedness check)"
     parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT, rock_conductivity=0.1,
                            fluid_conductivity=0.0),

@@ -59,6 +59,7 @@ class GravityColumn(Scene):
     top free.  u_y = -rho g / (lambda + 2G) (H y - y^2/2) is quadratic, so P2
     reproduces it to round-off (a patch test of the body force)."""
     name = "gravity_column"
+    dimension = 2
     description = "elastic column under its own weight (body force): quadratic settlement, exact for P2"
     parameters = (mt.group("Rock", mt.ELASTIC + ("rock_density", "gravity")), GravityParams)
     time = TimeDefaults(final_time=1.0, dt_initial=1.0, mesh_size=5.0)
@@ -141,6 +142,7 @@ class _ThermalStressMonitor(Monitor):
 @register
 class ThermalStress(Scene):
     name = "thermal_stress"
+    dimension = 2
     description = ("1D cooling with constrained lateral strain (verification.md 7b): T, lateral stress, "
                    "surface motion")
     parameters = (mt.group("Rock", mt.ELASTIC + mt.ROCK_HEAT + ("rock_thermal_expansion",)),

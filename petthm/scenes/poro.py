@@ -269,6 +269,7 @@ class _MandelMonitor(Monitor):
 @register
 class Mandel(Scene):
     name = "mandel"
+    dimension = 2
     description = "Mandel's problem (verification.md 6b): pressure incl. the Mandel-Cryer overshoot"
     parameters = (POROUS_ROCK, MandelParams)
     time = TimeDefaults(final_time=700.0, dt_initial=0.0648, dt_growth=1.05, dt_max=1.3, mesh_size=0.5)

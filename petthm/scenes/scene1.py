@@ -79,6 +79,7 @@ class _Scene1Monitor(Monitor):
 @register
 class RigidFracture(Scene):
     name = "rigid_fracture"
+    dimension = 2
     description = "Scene 1: cold water through a rigid fracture with leakoff into a permeable matrix (2D)"
     parameters = (mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_viscosity="water"),
                   mt.group("Rock", mt.ROCK_HEAT + ("rock_porosity", "rock_permeability"), rock_porosity=0.1,
@@ -185,6 +186,7 @@ class _LeakoffHeatMonitor(Monitor):
 @register
 class LeakoffHeat(Scene):
     name = "leakoff_heat"
+    dimension = 2
     description = ("uniform leakoff fraction m: outlet temperature vs the Laplace-domain solution "
                    "(verification.md 2)")
     parameters = (mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_compressibility=0.0,

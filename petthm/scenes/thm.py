@@ -140,6 +140,7 @@ class _Scene2Monitor(Monitor):
 @register
 class PennyImpermeable(Scene):
     name = "penny_impermeable"
+    dimension = 3
     description = ("Scene 2: cold water through a deformable penny fracture with contact in impermeable "
                    "rock (3D)")
     parameters = (mt.group("Rock", mt.ELASTIC + mt.ROCK_HEAT + ("rock_porosity", "rock_thermal_expansion")),

@@ -214,14 +214,19 @@ def test_an_output_folder_that_cannot_be_created_is_an_error(tmp_path, ranks):
 
 def test_a_mesh_that_does_not_fit_the_scene_is_a_one_line_error(tmp_path):
     """Issue 15: a fracture scene given a mesh without fractures, a scene
-    without fracture physics given a split mesh, and a scene whose set-up
-    fails on a user's mesh of another dimension: one-line errors naming the
-    mesh file (the last used to be an AttributeError traceback)."""
+    without fracture physics given a split mesh, a mesh of another dimension
+    (heat_erfc used to fail in its monitor with a broadcasting error), and a
+    scene whose set-up fails on a user's mesh (an AttributeError traceback):
+    one-line errors naming the mesh file."""
     run_petthm("heat_mms", tmp_path / "plain3d", "-thm_mms_dim", 3, "-thm_mesh_size", 0.5)
+    run_petthm("heat_mms", tmp_path / "plain2d", "-thm_mesh_size", 0.5)
     run_petthm("contact_patch", tmp_path / "cracked", "-thm_contact_dim", 2, "-thm_final_time", 0.25)
     plain, cracked = tmp_path / "plain3d" / "mesh.msh", tmp_path / "cracked" / "mesh.msh"
+    plain2d = tmp_path / "plain2d" / "mesh.msh"
     cases = [("contact_patch", plain, "has no fracture"), ("heat_mms", cracked, "has fractures"),
-             ("lauwerier", plain, "does not fit scene lauwerier")]
+             ("heat_erfc", plain, "is 3D, but scene heat_erfc is 2D"),
+             ("lauwerier", plain, "is 3D, but scene lauwerier is 2D (option -thm_lauwerier_dim = 2)"),
+             ("lauwerier", plain2d, "does not fit scene lauwerier")]
     for scene, mesh, words in cases:
         proc, _ = run_petthm(scene, tmp_path / f"{scene}_out", "-thm_mesh_file", mesh, check=False)
         msg = _one_line_error(proc)
