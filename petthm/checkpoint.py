@@ -34,9 +34,22 @@ FILE = "checkpoint.h5"
 SIGNALS = ("SIGTERM", "SIGINT", "SIGUSR1")
 
 
+#: the attribute of a DM that keeps its ``_point_blocks`` (the layout does not change during a run)
+BLOCKS = "petthm_point_blocks"
+
+
 def _point_blocks(dm):
     """The local vector's layout by point: (serial point number, offset,
-    dof count) of the points with dofs; and which of them this rank owns."""
+    dof count) of the points with dofs; and which of them this rank owns
+    (computed once per DM: a loop over the points)."""
+    cached = dm.getAttr(BLOCKS)
+    if cached is None:
+        cached = _layout(dm)
+        dm.setAttr(BLOCKS, cached)
+    return cached
+
+
+def _layout(dm):
     from .compat import get_local_section
     from .mesh import original_points
     sec = get_local_section(dm)
