@@ -347,9 +347,14 @@ class Run:
         stop.install()
         try:
             reason = stepper.solve()
-        except InputError:             # raised on every rank alike (a solver option, -vi_groups)
+        except InputError:             # raised on every rank alike in a Python PC's set-up (-vi_groups)
             stepper.destroy()          # now: a Python PC left mid-set-up crashed PETSc's exit
             raise
+        except PETSc.Error as e:       # PETSc >= 3.20 hands it back as error 101, the InputError its cause
+            if not isinstance(e.__cause__, InputError):
+                raise
+            stepper.destroy()
+            raise e.__cause__ from None
         finally:
             stop.restore()
         self._pop("solve", st, t0)

@@ -196,8 +196,8 @@ def test_a_corrupt_mesh_file_is_a_one_line_error(tmp_path):
     msh = tmp_path / "corrupt.msh"
     msh.write_text("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\nxx\n")
     proc, _ = run_petthm("heat_erfc", tmp_path / "out", "-thm_mesh_file", msh, check=False)
-    msg = _one_line_error(proc)
-    assert "corrupt.msh" in msg and "Gmsh" in msg
+    msg = _one_line_error(proc)                 # PETSc's own words differ between versions
+    assert "PETSc refused the mesh file" in msg and "corrupt.msh" in msg
 
 
 @pytest.mark.parametrize("ranks", [1, 2])
