@@ -34,7 +34,7 @@ With Coulomb friction the block has the rows of the tangential traction
 tau too (kernels/friction.py): a sticking node's tau rows glue the
 tangential jump as lam glues the normal one (a closed sticking node is
 glued whole), a slipping node's are rotated to its slip direction and
-eliminated (``glue.slip_rotation``, ``glue.block_inverse``;
+eliminated (``nodeblocks.slip_rotation``, ``nodeblocks.block_inverse``;
 docs/solvers.md "Friction").
 
 Everything is a parallel PETSc matrix or vector operation (``glue``: the
@@ -50,7 +50,8 @@ from petsc4py import PETSc
 
 from . import compat, pmg
 from .fieldsplit import mode_vectors, orthonormal_nullspace, served_rows
-from .glue import block_inverse, glue_maps, glued_basis
+from .glue import glue_maps, glued_basis
+from .nodeblocks import block_inverse
 from .solver import propose_defaults
 
 #: smoothing steps per multigrid level of the glued elasticity (default)
