@@ -25,7 +25,7 @@ from .errors import InputError, petsc_option_errors
 from .fields import Discretisation
 from .mesh import Mesh, distribute, label_boundaries, read_plex
 from .model import Domain
-from .monitors import contact_node_fields
+from .monitors import contact_node_fields, hit
 from .output import FieldWriter, History, write_summary
 from .problem import Problem
 from .scenes.base import REGISTRY
@@ -320,10 +320,14 @@ class Run:
             history.write(row)
             if step == 1:
                 check_unused_petsc_options()
-            if step % interval == 0 or t >= control.final_time * (1 - 1e-12):
-                write_fields(t)
+            if step % interval == 0 or t >= control.final_time * (1 - 1e-12) or hit(t, control.hit_times):
+                write_fields(t)                           # and at the times the scene lands on
             if run.checkpoint_interval and step % run.checkpoint_interval == 0 and step > 0:
                 self._checkpoint(stepper)
+            reason = scene_monitor.stop_reason()
+            if reason:
+                stepper.fail(f"{reason} (t = {t:.6g} s, step {step})")
+                return
             received = stop.agreed(comm)
             if received:
                 self._checkpoint(stepper)

@@ -24,11 +24,11 @@ from .model import Region
 
 @dataclass(frozen=True)
 class Conserved:
-    """One balance: its name, the fields whose equations it sums, the field of
-    the well terms, and the stored-amount integrand per region."""
+    """One balance: its name, the fields whose equations it sums (the well
+    terms of each count: fracture and matrix wells), and the stored-amount
+    integrand per region."""
     name: str
     fields: tuple
-    well_field: str
     storage: dict            # {Domain: integrand(ctx) -> (nc, nq)}
 
 
@@ -70,9 +70,13 @@ class BalanceMonitor:
         S1 = self.stored(xl, t)
         out = {}
         for b in self.balances:
-            W, Wabs = pb.well_inflow(xl, t, b.well_field)
-            parts = [pb.reaction(rl, b.fields, (name,)) for name in pb.dirichlet_boundaries(b.fields)]
-            B, Babs = sum(parts), sum(abs(v) for v in parts)
+            W = Wabs = 0.0
+            for f in b.fields:
+                w, wa = pb.well_inflow(xl, t, f)
+                W, Wabs = W + w, Wabs + wa
+            names = pb.dirichlet_boundaries(b.fields)
+            B = pb.reaction(rl, b.fields, names)          # each constrained dof once (edges of two faces)
+            Babs = sum(abs(pb.reaction(rl, b.fields, (name,))) for name in names)
             dS = S1[b.name] - S0[b.name]
             scale = max(dt * (Wabs + Babs), abs(dS), 1e-300)
             out[f"{b.name}_balance"] = (dS - dt * (W + B)) / scale

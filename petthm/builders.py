@@ -15,7 +15,8 @@ builder                physics (physics.md section)             fields
 ``fracture_flow``      cubic law with storage, da/dt (4)         pf
 ``leakoff``            pm = pf on the walls (5)                  -
 ``fracture_heat``      fracture heat, wall exchange (7)          Tf
-``wells``              point wells (9)                           -
+``wells``              point wells, on a fracture or along a     -
+                       matrix well's interval (9)
 =====================  =======================================  ===========
 
 ``build()`` then adds the terms that couple two of them once both exist
@@ -68,11 +69,12 @@ class ModelBuilder:
     def elasticity(self, degree: int, *, biot: bool = False, thermal: bool = False,
                    body_force: tuple = ()) -> pe.Elastic:
         """u with drained elasticity (E, nu), the Biot coupling to pm
-        (alpha) and the thermal strain of Tm (beta_s, T0)."""
+        (alpha, p0 when the scene has -thm_initial_pressure) and the thermal
+        strain of Tm (beta_s, T0)."""
         p = self.p
         kw = {}
-        if biot:
-            kw.update(p="pm", biot=p.rock_biot_coefficient)
+        if biot:           # sigma carries alpha (pm - p0): u is the displacement from the in-situ state
+            kw.update(p="pm", biot=p.rock_biot_coefficient, p_ref=getattr(p, "initial_pressure", 0.0))
         if thermal:
             kw.update(T="Tm", thermal_expansion=p.rock_thermal_expansion, T_ref=p.T0)
         self.elastic = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, self.dim,

@@ -177,6 +177,8 @@ DECLARED = {
     "injection_rate": param(1e-4, "m3/s", "injection rate Q (per metre in 2D)", lo=0.0),
     "injection_temperature": param(20.0, "degC", "injected water temperature"),
     "production_pressure": param(0.0, "Pa", "producer well pressure"),
+    "production_rate": param(0.0, "m3/s", "producer rate Q_p (0: the producer runs at "
+                             "-thm_production_pressure)", lo=0.0),
     "well_radius": param(0.1, "m", "well radius r_w (producer well index)", **_POS),
     # body force (section 2)
     "gravity": param(9.81, "m/s2", "gravitational acceleration g (downwards)", lo=0.0),

@@ -22,6 +22,16 @@ from .errors import InputError
 BoundaryPredicate = Callable[[np.ndarray], np.ndarray]
 
 
+class Interior:
+    """A named part inside the domain (a matrix well's perforated interval):
+    the vertices where ``predicate(x)`` holds for their coordinates (n, dim)
+    and the edges between two of them.  Used in a scene's ``boundaries()``
+    in place of a facet predicate, for Dirichlet data on lines of the mesh."""
+
+    def __init__(self, predicate: BoundaryPredicate):
+        self.predicate = predicate
+
+
 def _mpi_max():
     from mpi4py import MPI
     return MPI.MAX
@@ -58,10 +68,24 @@ def label_boundaries(dm: PETSc.DMPlex, parts: Mapping[str, BoundaryPredicate]) -
     for name, predicate in parts.items():
         dm.createLabel(label_name(name))
         label = dm.getLabel(label_name(name))
+        if isinstance(predicate, Interior):
+            _label_interior(label, topo, predicate.predicate)
+            continue
         for p in facets[np.asarray(predicate(centroids), dtype=bool)]:
             label.setValue(int(p), 1)
         dm.labelComplete(label)
     dm.removeLabel("thm_boundary_all")
+
+
+def _label_interior(label, topo: "_VertexTopology", predicate: BoundaryPredicate) -> None:
+    """The vertices on which ``predicate`` holds and the edges joining two of them."""
+    on = np.asarray(predicate(topo.coords), dtype=bool)
+    for v in np.flatnonzero(on):
+        label.setValue(int(v + topo.vstart), 1)
+    if on.any():
+        ends = topo.cones[1] - topo.vstart                      # (nedges, 2)
+        for e in np.flatnonzero(on[ends].all(axis=1)):
+            label.setValue(int(e + topo.starts[1]), 1)
 
 
 #: the attribute of a distributed DM that holds each local point's number in

@@ -137,7 +137,7 @@ def _add_fracture(gmsh, f: Fracture):
 def box_with_fractures(path: str, lengths: Sequence[float], size: float,
                        fractures: Sequence[Fracture], grading_distance: float = 0.0,
                        origin: Sequence[float] = (), wells: Sequence[tuple] = (),
-                       well_size: float = 0.0) -> str:
+                       well_size: float = 0.0, well_lines: Sequence[tuple] = ()) -> str:
     """Box (or rectangle) ``origin + [0, lengths]`` with embedded fractures; the
     mesh conforms to them.
 
@@ -149,6 +149,9 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     linearly from each fracture's ``size`` to ``size`` over that distance.
     ``wells``: points (on a fracture) that become mesh vertices, with mesh
     size ``well_size`` (default: the fracture's) growing away from them.
+    ``well_lines``: segments ((x0, y0, z0), (x1, y1, z1)) embedded in the
+    mesh (the perforated intervals of matrix wells: their nodes lie on the
+    segment, ``petthm.matrixwells``), with the size ``well_size`` along them.
     """
     dim = len(lengths)
     o = tuple(origin) or (0.0,) * dim
@@ -157,15 +160,19 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     dom = occ.addRectangle(*o[:2], 0, *lengths) if dim == 2 else occ.addBox(*o, *lengths)
     tools = [_add_fracture(gmsh, f) for f in fractures]
     wpts = [(0, occ.addPoint(*(tuple(w) + (0.0,) * (3 - len(w))))) for w in wells]
-    _, mapping = occ.fragment([(dim, dom)], tools + wpts)
+    wlines = [(1, occ.addLine(occ.addPoint(*a), occ.addPoint(*b))) for a, b in well_lines]
+    _, mapping = occ.fragment([(dim, dom)], tools + wpts + wlines)
     occ.synchronize()
     mapping = _drop_outside(gmsh, dim, mapping)
     on_outer = _tag_domain(gmsh, dim, [t for (d, t) in mapping[0] if d == dim])
     for i, m in enumerate(mapping[1:1 + len(fractures)]):
         _tag_fracture(gmsh, dim, i, [t for (d, t) in m if d == dim - 1], on_outer)
-    for i, m in enumerate(mapping[1 + len(fractures):]):
+    line_maps = mapping[1 + len(fractures) + len(wells):]
+    _embed_curves(gmsh, dim, [t for m in line_maps for (d, t) in m if d == 1],
+                  [t for (d, t) in mapping[0] if d == dim])
+    for i, m in enumerate(mapping[1 + len(fractures):1 + len(fractures) + len(wells)]):
         gmsh.model.addPhysicalGroup(0, [t for (d, t) in m if d == 0], WELL_TAG0 + i)
-    fine = [f.size or size for f in fractures] + ([well_size] if wells and well_size else [])
+    fine = [f.size or size for f in fractures] + ([well_size] if (wells or well_lines) and well_size else [])
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     gmsh.option.setNumber("Mesh.MeshSizeMin", min(fine))
     if grading_distance > 0:
@@ -176,8 +183,12 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
             fields.append(_threshold(mf, "CurvesList" if dim == 2 else "SurfacesList", ents,
                                      f.size or size, size, grading_distance))
         if wells and well_size:
-            ents = [t for m in mapping[1 + len(fractures):] for (d, t) in m if d == 0]
+            ents = [t for m in mapping[1 + len(fractures):1 + len(fractures) + len(wells)]
+                    for (d, t) in m if d == 0]
             fields.append(_threshold(mf, "PointsList", ents, well_size, size, grading_distance))
+        if well_lines and well_size:
+            ents = [t for m in line_maps for (d, t) in m if d == 1]
+            fields.append(_threshold(mf, "CurvesList", ents, well_size, size, grading_distance))
         _background_size(gmsh, fields)
     return _write(gmsh, dim, path)
 
@@ -241,6 +252,22 @@ def layered_half_box_with_disc(path: str, half: float, radius: float, size: floa
     _background_size(gmsh, fields)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     return _write(gmsh, 3, path)
+
+
+def _embed_curves(gmsh, dim: int, curves: list, cells: list) -> None:
+    """Embed each curve in the cell (volume) that contains it: the OCC
+    fragment embeds a curve inside a volume by itself only when no surface
+    is embedded there too."""
+    for c in curves:
+        lo, hi = gmsh.model.getParametrizationBounds(1, c)
+        mid = np.asarray(gmsh.model.getValue(1, c, [0.5 * (lo[0] + hi[0])]))
+        for v in cells:
+            if (1, c) in gmsh.model.mesh.getEmbedded(dim, v):
+                break
+            box = np.asarray(gmsh.model.getBoundingBox(dim, v))
+            if np.all(mid >= box[:3]) and np.all(mid <= box[3:]):       # the domains here are boxes
+                gmsh.model.mesh.embed(1, [c], dim, v)
+                break
 
 
 def _tag_domain(gmsh, dim: int, cells: list) -> set:

@@ -82,9 +82,12 @@ class FractureWells:
 
 
 # -- balances ----------------------------------------------------------------------------------
-def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=None) -> list[Conserved]:
+def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=None,
+                      elastic=None) -> list[Conserved]:
     """Fluid volume and (with ``heat`` = (T0, rho_f C_f, (rho C)m)) energy
-    balances of physics.md section 7.
+    balances of physics.md section 7.  With ``elastic`` (a
+    ``poroelastic.Elastic`` coupled to pm) the matrix's fluid volume gains
+    the Biot term alpha div u (section 5).
 
     The stored amounts are integrated relative to the initial pressure and
     temperature (constants drop out of the change, and the subtraction of
@@ -110,7 +113,11 @@ def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=No
     storage = {Domain.FRACTURE: vol(frac_flow)}
     if matrix_flow is not None:
         storage[Domain.MATRIX] = vol(matrix_flow)
-    out = [Conserved("mass", ("pf", "pm"), "pf", storage)]
+        if elastic is not None and elastic.p == matrix_flow.p and elastic.biot:
+            pore = storage[Domain.MATRIX]
+            storage[Domain.MATRIX] = lambda ctx: pore(ctx) + elastic.biot * np.trace(
+                ctx.grad(elastic.u), axis1=2, axis2=3)
+    out = [Conserved("mass", ("pf", "pm"), storage)]
     if heat:
         def frac_energy(ctx):
             Tf = ctx.value("Tf")[..., 0]
@@ -118,7 +125,7 @@ def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=No
                 return a_ref * rho_c_f * (Tf - T0)
             a = aperture(ctx)                    # a (T - T0) + T0 (a - a_ref): the change of a T
             return rho_c_f * (a * (Tf - T0) + T0 * (a - a_ref))
-        out.append(Conserved("energy", ("Tf", "Tm"), "Tf", {
+        out.append(Conserved("energy", ("Tf", "Tm"), {
             Domain.FRACTURE: frac_energy,
             Domain.MATRIX: lambda ctx: rho_c_m * (ctx.value("Tm")[..., 0] - T0)}))
     return out

@@ -218,6 +218,7 @@ class TimeStepper:
         self.stopped: str | None = None
         self.failure: str | None = None          # why the run was stopped as failed (not a TS reason)
         self._last_dt_cut = None
+        self._reported = None                    # (step, t) the user's monitor saw last
 
     def _set_field_splits(self, pc):
         """A field-split preconditioner gets one split per field, named by the
@@ -264,16 +265,21 @@ class TimeStepper:
             dt = min(upcoming)
         if remaining > 0:
             ts.setTimeStep(min(dt, remaining))
+        self._monitor(ts, ts.getStepNumber(), t, ts.getSolution())
 
     def _monitor(self, ts, step, t, X):
-        """Call the user's monitor; an exception stops the run cleanly and is
-        re-raised by ``solve`` (exceptions must not cross the C callback).
-        In parallel a failure on some ranks only would leave the others
-        waiting in the next step's collectives (and they may be inside the
-        monitor's own), so the failing rank prints its traceback and aborts
-        the whole run."""
-        if self._user_monitor is None or self.error is not None:
+        """Call the user's monitor once per state: from the post-step of
+        every accepted step (so that a stop it asks for ends TSSolve at
+        once: TS resets a reason set in TSMonitor when it starts the next
+        step) and from TSMonitor for the initial state.  An exception stops
+        the run cleanly and is re-raised by ``solve`` (exceptions must not
+        cross the C callback).  In parallel a failure on some ranks only
+        would leave the others waiting in the next step's collectives (and
+        they may be inside the monitor's own), so the failing rank prints
+        its traceback and aborts the whole run."""
+        if self._user_monitor is None or self.error is not None or self._reported == (step, t):
             return
+        self._reported = (step, t)
         try:
             self._user_monitor(step, t, X)
         except Exception as e:  # noqa: BLE001 - re-raised after TSSolve returns
@@ -293,6 +299,12 @@ class TimeStepper:
         """Stop after the current step (from the monitor; collective): the
         run ends with status interrupted and ``message``."""
         self.stopped = message
+        self._stop_now()
+
+    def fail(self, message: str) -> None:
+        """Stop after the current step as failed (a monitor's verdict;
+        collective): the run ends with status failed and ``message``."""
+        self.failure = message
         self._stop_now()
 
     def _stop_now(self) -> None:

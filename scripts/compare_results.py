@@ -78,6 +78,10 @@ CASES = [
         1e4,
         "-thm_fracture_heat_exchange", "nusselt", "-thm_thermomechanical_heating", 1,
         "-thm_scene2_normal_stress", 55e6]),
+    ("inclined_penny", "inclined_penny", [
+        "-thm_fe_degree", 1, "-thm_scene3_fracture_size", 50, "-thm_scene3_well_size", 15,
+        "-thm_mesh_size", 300,
+        "-thm_final_time", 2e6]),
 ]
 
 #: older option name -> the name of physics.md section 12 (trees with petthm/materials.py)

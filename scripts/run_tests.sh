@@ -9,7 +9,7 @@
 #      first time, then reused): ${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}.
 #      They are tests/unit (compat: COO, sections, the cohesive split),
 #      tests/interface (options, output, errors), tests/parallel, tests/solvers
-#      and the contact and friction tests; the verification of the heat, flow,
+#      and the contact, friction and Scene 3 tests; the verification of the heat, flow,
 #      poroelastic and Scene 2 discretisations (the same numpy kernels and
 #      LU solves on both versions) runs on the first pass only, and so does
 #      the 3D Sneddon penny crack (a P2 LU solve of 2.5 min with PETSc's own
@@ -28,7 +28,7 @@ if [ "${CI:-}" = true ] || [ "${PETTHM_TEST_NEWEST:-0}" = 1 ]; then
   bash scripts/install_petsc_pypi.sh "$venv"
   start=$(date +%s)
   "$venv/bin/python" -m pytest -q tests/unit tests/interface tests/parallel tests/solvers \
-      tests/verification/test_contact.py tests/verification/test_friction.py \
+      tests/verification/test_contact.py tests/verification/test_friction.py tests/verification/test_scene3.py \
       --deselect "tests/verification/test_contact.py::test_sneddon_opening[penny_3d]" "$@"
   echo "== PETSc 3.26.1 pass: $(( $(date +%s) - start )) s =="
 fi

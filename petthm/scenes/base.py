@@ -49,6 +49,12 @@ class Monitor:
     def report(self, problem, t: float) -> dict:
         return {}
 
+    def stop_reason(self) -> str | None:
+        """Why the run cannot go on after the step just monitored (the same
+        on every rank: a value of global reductions), or None.  The run then
+        ends as failed with this message, the step's state written."""
+        return None
+
 
 @dataclass
 class Setup:
