@@ -305,7 +305,11 @@ def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray
     covered[idx] = True
     out = {}
     for name, v in per_cell.items():
+        # a node no local cell touches is averaged from the ranks whose cells do (below), except a
+        # constrained one (on the front, where u is not split): its prescribed lam (and tau = 0), no jump
         a = np.zeros((len(order), v.shape[-1]))
+        if name == "lam":
+            a[:, 0] = xl[order] * problem.scales["lam"].scale
         a[idx] = v.reshape(-1, v.shape[-1])
         a = _nodal_average(problem, order, a, covered)
         out[name] = a[:, 0] if a.shape[1] == 1 else a

@@ -1,7 +1,7 @@
 """Scene 3 of the paper (``inclined_penny``): the three cases to 30 years, the
 equivalents of the paper's Figs. 8-12, and the table of its statements.
 
-    python scripts/scene3_study.py [--variant coarse|default] [--cases 1,2,3] [--jobs 1]
+    python scripts/scene3_study.py [--variant coarse|medium|default] [--cases 1,2,3] [--jobs 1]
                                    [--out DIR] [--plot-only] [--demo] [-- extra petthm options]
 
 Each case runs ``python -m petthm inclined_penny -options_file
@@ -26,8 +26,13 @@ import numpy as np
 from study_tables import ROOT, markdown, read_history, read_summary, run_petthm, write_csv
 
 YEAR = 365.25 * 86400.0
-OPTS = {"coarse": os.path.join(ROOT, "options", "scenes", "inclined_penny_coarse.opts"),
-        "default": os.path.join(ROOT, "options", "scenes", "inclined_penny.opts")}
+_COARSE = os.path.join(ROOT, "options", "scenes", "inclined_penny_coarse.opts")
+#: variant -> (options file, more options): coarse (2826 cells, P1 u), medium (11911 cells, P1 u),
+#: default (the paper's P2 u on the default mesh)
+VARIANTS = {"coarse": (_COARSE, []),
+            "medium": (_COARSE, ["-thm_scene3_fracture_size", 25, "-thm_scene3_well_size", 7.5,
+                                 "-thm_mesh_size", 200]),
+            "default": (os.path.join(ROOT, "options", "scenes", "inclined_penny.opts"), [])}
 #: a production temperature this far below T0 counts as the thermal breakthrough (K)
 BREAKTHROUGH = 1.0
 
@@ -37,7 +42,8 @@ def run_dir(out, case):
 
 
 def run(out, variant, case, extra):
-    run_petthm("inclined_penny", run_dir(out, case), "-options_file", OPTS[variant], "-thm_scene3_case", case,
+    opts, more = VARIANTS[variant]
+    run_petthm("inclined_penny", run_dir(out, case), "-options_file", opts, *more, "-thm_scene3_case", case,
                *extra)
     print(f"case {case}: done", flush=True)
 
@@ -264,7 +270,7 @@ def report(out, variant, cases):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--variant", choices=tuple(OPTS), default="coarse")
+    ap.add_argument("--variant", choices=tuple(VARIANTS), default="coarse")
     ap.add_argument("--out", default="")
     ap.add_argument("--cases", default="1,2,3")
     ap.add_argument("--jobs", type=int, default=1)

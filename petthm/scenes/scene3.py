@@ -111,7 +111,7 @@ class _Scene3Monitor(Monitor):
         ident = np.abs(a - self.law.closure_aperture(lam)[0])[closed]
         out["aperture_identity"] = probes.global_max(comm, ident, empty=0.0) / a0
         out["lam_min"] = probes.global_min(comm, lam)
-        out["nodes_open"] = probes.global_count(comm, ~closed)
+        out["nodes_open"] = probes.global_count(comm, ~closed & self.owned(problem))
         opening, _ = contact_node_checks(problem, OPEN_TRACTION * sc.lam0, X, t)
         out["closed_opening"] = probes.global_max(comm, [opening]) / a0
         out.update(slip_columns(problem, fields=f) if problem.model.friction is not None else
@@ -123,6 +123,14 @@ class _Scene3Monitor(Monitor):
             self.peak = (t, best)
         self.last = out
         return out
+
+    def owned(self, problem) -> np.ndarray:
+        """The lam nodes this rank owns (each node counted once over the
+        ranks; the front's constrained nodes are never open)."""
+        disc = problem.disc
+        g = disc.global_index[disc.field_local_dofs("lam")[:, 0]]
+        lo, hi = disc.ownership_range()
+        return (g >= lo) & (g < hi)
 
     def stop_reason(self):
         p = self.last.get("production_pressure")

@@ -130,6 +130,32 @@ def test_scene2_parallel_matches_serial(tmp_path):
 
 
 @pytest.mark.parallel
+def test_scene3_parallel_matches_serial(tmp_path):
+    """The coarse Scene 3 (every field, contact, matrix wells, mu(T), Biot)
+    for 30 days: the well and fracture histories and the final rock
+    temperature and pressure on 2 ranks equal the serial run to 1e-8."""
+    opts = ("-options_file", f"{ROOT}/options/scenes/inclined_penny_coarse.opts", "-thm_scene3_case", 2,
+            "-thm_final_time", 30 * 86400) + solver_without_parallel_direct()
+    runs = {}
+    for n in (1, 2):
+        _, s = run_petthm("inclined_penny", tmp_path / f"n{n}", *opts, ranks=n, timeout=900)
+        assert s["status"] == "completed" and s["ranks"] == n
+        runs[n] = (s, _history(tmp_path / f"n{n}"), final_field(tmp_path / f"n{n}"),
+                   final_field(tmp_path / f"n{n}", "pm"))
+    (s1, h1, (x1, v1), (_, p1)), (s2, h2, (x2, v2), (_, p2)) = runs[1], runs[2]
+    assert s1["dofs"] == s2["dofs"] and len(h1) == len(h2)
+    keys = ("injection_pressure", "production_pressure", "production_temperature", "aperture_increase_max",
+            "lam_min", "raised_area", "nodes_open", "aperture_identity")
+    # each column relative to its largest value (the aperture increase starts at 0; the identity is 0)
+    worst = max(max(abs(float(a[k]) - float(b[k])) for a, b in zip(h1, h2)) /
+                max(max(abs(float(a[k])) for a in h1), 1e-300) for k in keys)
+    assert np.allclose(x1, x2, rtol=0, atol=1e-9)
+    field = max(np.abs(v2 - v1).max() / np.abs(v1).max(), np.abs(p2 - p1).max() / np.abs(p1).max())
+    print(f"inclined_penny: 2 ranks vs serial: histories {worst:.1e}, final Tm and pm {field:.1e}")
+    assert worst <= 1e-8 and field <= 1e-8
+
+
+@pytest.mark.parallel
 def test_monitor_failure_on_one_rank_stops_every_rank(tmp_path):
     """A scene monitor that raises on rank 1 only (tests/parallel/fault_monitor.py):
     the run stops with the traceback and a non-zero exit instead of leaving
