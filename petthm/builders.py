@@ -191,11 +191,14 @@ class ModelBuilder:
         (a tie, docs/fracture.md), so the Darcy flux through the walls is L."""
         self.model.ties["pm"] = "pf"
 
-    def fracture_heat(self, degree: int, *, reference_aperture: float, lumped: bool = False) -> hk.Heat:
+    def fracture_heat(self, degree: int, *, reference_aperture: float, lumped: bool = False,
+                      supg: bool = True, source: Optional[Callable] = None) -> hk.Heat:
         """Tf: advection-conduction in the fracture and the wall exchange
         with the rock (``-thm_fracture_heat_exchange``): equilibrium ties the
         wall nodes of Tm to Tf; otherwise hw (Tf - Tm) on both faces, with
-        hw = Nu lambda_f / (2 a) at the local aperture of a deformable fracture."""
+        hw = Nu lambda_f / (2 a) at the local aperture of a deformable fracture.
+        ``source``: a heat source per unit fracture area s(x, t) (W/m2; the
+        manufactured solutions)."""
         p = self.p
         a = reference_aperture if self.aperture is None else 1.0
         ex = p.fracture_heat_exchange
@@ -210,7 +213,8 @@ class ModelBuilder:
                                  "with a permeable matrix (the heat carried by leakoff needs the wall flux)")
             self.model.add(hk.exchange_terms("Tf", traces("Tm"), hw, lumped=lumped))
         h = hk.Heat(Domain.FRACTURE, "Tf", a * p.fluid_rho_c, a * p.fluid_conductivity, p.fluid_rho_c,
-                    self.flows[Domain.FRACTURE], degree=degree, supg=True, aperture=self.aperture)
+                    self.flows[Domain.FRACTURE], degree=degree, supg=supg, aperture=self.aperture,
+                    source=source)
         self.model.add_field(FieldSpec("Tf", 1, degree, Domain.FRACTURE))
         self.model.add(hk.heat_terms(h))
         self.heats[Domain.FRACTURE] = h

@@ -6,6 +6,12 @@ from dataclasses import dataclass
 import numpy as np
 
 
+def water_viscosity(T, lib=np):
+    """mu(T) of water in Pa s, T in kelvin (physics.md section 8); ``lib``:
+    numpy, or sympy for the symbolic form."""
+    return lib.exp(-52.843 + 3703.6 / T + 5.866 * lib.log(T) - 5.88e-29 * T ** 10)
+
+
 @dataclass(frozen=True)
 class Viscosity:
     """mu(T) in Pa s: a constant, or water (physics.md section 8, T in kelvin):
@@ -18,8 +24,12 @@ class Viscosity:
     def mu(self, T):
         if not self.water:
             return np.full(np.shape(T), self.value)
-        T = np.asarray(T, dtype=float)
-        return np.exp(-52.843 + 3703.6 / T + 5.866 * np.log(T) - 5.88e-29 * T ** 10)
+        return water_viscosity(np.asarray(T, dtype=float))
+
+    def symbolic(self, T):
+        """mu(T) as a sympy expression of the symbol ``T`` (manufactured solutions)."""
+        import sympy
+        return water_viscosity(T, sympy) if self.water else sympy.Float(self.value)
 
     def mobility(self, T):
         """(1/mu, d(1/mu)/dT)."""

@@ -295,6 +295,22 @@ class Mesh:
         out[ise] = self.edge_midpoints()[points[ise] - self.estart]
         return out
 
+    def inside_points(self, points: np.ndarray) -> np.ndarray:
+        """For each vertex or edge point, the centroid of a cell whose closure
+        holds it (n, dim): which side of a split fracture a node is on (the
+        cells of its copy lie on that side only); NaN for a point of no local cell."""
+        points = np.asarray(points)
+        nodes = np.hstack([self.cell_vertices + self.vstart, self.cell_edges]) if self.ncells else \
+            np.zeros((0, 1), dtype=compat.INT)
+        flat, first = np.unique(nodes.ravel(), return_index=True)
+        cells = first // nodes.shape[1]
+        centroids = self.vertex_coords[self.cell_vertices].mean(axis=1)
+        out = np.full((len(points), self.dim), np.nan)
+        pos = np.searchsorted(flat, points)
+        found = (pos < len(flat)) & (flat[np.minimum(pos, len(flat) - 1)] == points)
+        out[found] = centroids[cells[pos[found]]]
+        return out
+
     # -- boundaries ---------------------------------------------------------
     def label_points(self, name: str | None, depth: int | None = None,
                      label: str | None = None) -> np.ndarray:

@@ -83,13 +83,20 @@ class Problem:
         return xl, xdl
 
     def set_initial(self, funcs: dict[str, Callable[[np.ndarray], np.ndarray]]) -> None:
-        """Fill X from initial-value functions of the node coordinates (SI)."""
+        """Fill X from initial-value functions of the node coordinates (SI);
+        a function with ``sided`` set (``scenes.base.on_sides``) also
+        receives, for each node, a point inside a cell of the node: the two
+        copies of a node on a fracture take the values of their sides."""
         xl = self._Xl.getArray()
         xl[:] = 0.0
         for name, f in funcs.items():
             sc = self.scales[name]
             dofs = self.disc.field_local_dofs(name)
-            vals = np.asarray(f(self.disc.field_node_coordinates(name)), dtype=float)
+            x = self.disc.field_node_coordinates(name)
+            if getattr(f, "sided", False):     # a field discontinuous across a fracture: f(x, inside)
+                vals = np.asarray(f(x, self.disc.mesh.inside_points(self.disc.node_points(name))))
+            else:
+                vals = np.asarray(f(x), dtype=float)
             xl[dofs] = (vals.reshape(dofs.shape) - sc.offset) / sc.scale
         self.dm.localToGlobal(self._Xl, self.X, addv=PETSc.InsertMode.INSERT_VALUES)
 

@@ -32,5 +32,8 @@ if ! python -c "import petsc4py, sys; sys.exit(petsc4py.__version__ != '$PETSC_V
   python -m pip install -v --no-build-isolation "petsc4py==$PETSC_VERSION" > "$VENV/petsc4py-build.log" 2>&1
   echo "PETSc $PETSC_VERSION + petsc4py built in $(( $(date +%s) - start )) s into $VENV"
 fi
+# petthm's own pure-Python dependencies that the PETSc build step does not bring (kept apart from it: a
+# cached environment made before a dependency was added gets it here)
+python -c "import sympy" 2>/dev/null || python -m pip install -q sympy
 python -m pip install -q --no-deps --no-build-isolation -e "$here"
 python -c "from petsc4py import PETSc; print('petsc4py in $VENV: PETSc', '.'.join(map(str, PETSc.Sys.getVersion())))"

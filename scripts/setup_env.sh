@@ -12,7 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV=.venv
 APT_PACKAGES="python3-petsc4py-real python3-mpi4py python3-h5py python3-meshio python3-scipy
-  python3-matplotlib python3-pytest python3-venv python3-pip petsc-dev openmpi-bin"
+  python3-matplotlib python3-sympy python3-pytest python3-venv python3-pip petsc-dev openmpi-bin"
 
 has_petsc4py() {  # $1: python executable
   "$1" - <<'PY' 2>/dev/null
@@ -24,7 +24,7 @@ PY
 }
 
 if [ -x "$VENV/bin/python" ] && has_petsc4py "$VENV/bin/python" \
-   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, pytest, mpi4py, ruff" 2>/dev/null; then
+   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, mpi4py, ruff" 2>/dev/null; then
   exit 0
 fi
 
@@ -47,7 +47,7 @@ else
 fi
 PIP="$VENV/bin/python -m pip"
 need=""
-for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy pytest:pytest mpi4py:mpi4py ruff:ruff; do
+for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pytest mpi4py:mpi4py ruff:ruff; do
   "$VENV/bin/python" -c "import ${mod%%:*}" 2>/dev/null || need="$need ${mod#*:}"
 done
 [ -z "$need" ] || $PIP install -q $need

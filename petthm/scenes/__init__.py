@@ -2,4 +2,4 @@
 
 
 def load_all() -> None:
-    from . import contact, flow, friction, heat, lauwerier, mechanics, poro, scene1, scene3, thm  # noqa: F401
+    from . import contact, coupled_mms, flow, friction, heat, lauwerier, mechanics, poro, scene1, scene3, thm  # noqa: F401

@@ -97,6 +97,13 @@ def constant_in_time(value: float) -> Callable:
     return lambda x, t: np.full(len(x), value)
 
 
+def on_sides(f: Callable) -> Callable:
+    """An initial state f(x, inside) of a field that jumps across a fracture:
+    ``inside`` is a point of a cell next to each node (``Problem.set_initial``)."""
+    f.sided = True
+    return f
+
+
 def zero(x, t):
     return np.zeros(len(x))
 
