@@ -84,11 +84,13 @@ class ModelBuilder:
         return self.elastic
 
     def matrix_flow(self, degree: int, *, permeability: np.ndarray, storage: float,
-                    thermal_storage: float = 0.0, heat: bool = False) -> fk.Flow:
-        """pm: S dp/dt - B dT/dt + div(-k/mu grad p) = 0 (with ``heat``: mu(Tm), B)."""
+                    thermal_storage: float = 0.0, heat: bool = False,
+                    source: Optional[Callable] = None) -> fk.Flow:
+        """pm: S dp/dt - B dT/dt + div(-k/mu grad p) = s (with ``heat``: mu(Tm), B;
+        ``source`` s(x, t), 1/s: the manufactured solutions)."""
         fl = fk.Flow(Domain.MATRIX, "pm", "Tm" if heat else None, storage, permeability,
                      self.p.fluid_viscosity,
-                     thermal_storage if heat else 0.0)
+                     thermal_storage if heat else 0.0, source=source)
         self.model.add_field(FieldSpec("pm", 1, degree))
         self.model.add(fk.flow_terms(fl))
         self.flows[Domain.MATRIX] = fl
@@ -108,10 +110,13 @@ class ModelBuilder:
         p = self.p
         advect = Domain.MATRIX in self.flows or velocity is not None
         C = p.rho_c if capacity is None else capacity
+        el = self.elastic
+        flow = self.flows.get(Domain.MATRIX)
+        biot = (el.u, el.biot) if el is not None and flow is not None and el.p == flow.p and el.biot else ()
         h = hk.Heat(Domain.MATRIX, "Tm", C, p.conductivity if conductivity is None else conductivity,
-                    p.fluid_rho_c if advect else 0.0, self.flows.get(Domain.MATRIX), velocity=velocity,
+                    p.fluid_rho_c if advect else 0.0, flow, velocity=velocity,
                     source=source, reference_temperature=reference_temperature, degree=degree, supg=supg,
-                    lumped=lumped)
+                    lumped=lumped, biot=biot)
         self.model.add_field(FieldSpec("Tm", 1, degree))
         self.model.add(hk.heat_terms(h))
         self.heats[Domain.MATRIX] = h
@@ -172,7 +177,7 @@ class ModelBuilder:
 
     # -- fracture flow and heat -------------------------------------------------------------
     def fracture_flow(self, degree: int, *, reference_aperture: float, heat: bool = False,
-                      compressibility: Optional[float] = None) -> fk.Flow:
+                      compressibility: Optional[float] = None, source: Optional[Callable] = None) -> fk.Flow:
         """pf: cubic-law flow on the fracture with storage a c_f (- a beta_f dTf/dt
         with ``heat``), mu(Tf); per unit aperture on a deformable fracture."""
         p = self.p
@@ -180,7 +185,7 @@ class ModelBuilder:
         cf = p.fluid_compressibility if compressibility is None else compressibility
         beta = a * p.fluid_thermal_expansion if heat else 0.0
         fl = fk.Flow(Domain.FRACTURE, "pf", "Tf" if heat else None, a * cf, a ** 3 / 12 * np.eye(self.dim),
-                     p.fluid_viscosity, beta, aperture=self.aperture)
+                     p.fluid_viscosity, beta, aperture=self.aperture, source=source)
         self.model.add_field(FieldSpec("pf", 1, degree, Domain.FRACTURE))
         self.model.add(fk.flow_terms(fl))
         self.flows[Domain.FRACTURE] = fl

@@ -23,7 +23,9 @@ as the kernels implement them; the docstrings there):
   + div q, q = -k/mu(Tm) grad pm;  f_T = C_m dTm/dt + div(rho_f C_f q Tm
   - lambda_m grad Tm) (+ Tm (beta_s K d(div u)/dt - phi beta_f dpm/dt) with
   the thermo-mechanical heating of section 6);
-* fracture: g_pf = da/dt + a c_f dpf/dt - a beta_f dTf/dt + div qf + q_L,
+* fracture (the stored energy's rate form; backward Euler's quotient
+  differs by a term of the step: ``fracture_sources``):
+  g_pf = da/dt + a c_f dpf/dt - a beta_f dTf/dt + div qf + q_L,
   qf = -a^3/(12 mu(Tf)) grad pf, q_L = sum over the halves of q . n_out
   (n_out from Gamma into the half: the leakoff the matrix rows of the
   tied wall nodes carry); g_Tf = rho_f C_f (a dTf/dt + Tf da/dt)
@@ -263,8 +265,14 @@ class CoupledSolution:
         return {"u": self._halves(self.f_u), "pm": self._halves(self.f_p), "Tm": self._halves(self.f_T)}
 
     def fracture_sources(self) -> dict:
-        """{'pf': g_pf, 'Tf': g_Tf}."""
-        return {"pf": self._lambdify(self.g_pf), "Tf": self._lambdify(self.g_Tf)}
+        """{'pf': g_pf, 'Tf': g_Tf, 'Tf_increment': rho_f C_f da/dt dTf/dt}.
+        Backward Euler's stored energy (a T - a_old T_old)/dt (kernels/heat.py)
+        is rho_f C_f (a dTf/dt + Tf da/dt - dt da/dt dTf/dt) for fields affine
+        in t: the source of a step dt is g_Tf - dt Tf_increment."""
+        sp, t = self.sp, self.t
+        inc = self.c.rho_c_f * sp.diff(self.a, t) * sp.diff(self.Tf, t)
+        return {"pf": self._lambdify(self.g_pf), "Tf": self._lambdify(self.g_Tf),
+                "Tf_increment": self._lambdify(inc)}
 
     def face_load(self, half: int) -> Callable:
         """h of a half (..., d): sigma nu + P nu on its face."""

@@ -7,7 +7,7 @@ scales them by the local aperture a(lam, g) and its storage gains da/dt.
 With mobility M(T) = 1/mu(T) and a constant "permeability" tensor K (the
 matrix permeability k_m, or a^3/12 I on the fracture), for the unknown p::
 
-    S dp/dt - B dT/dt + div q = 0,        q = -M(T) K grad p
+    S dp/dt - B dT/dt + div q = s,        q = -M(T) K grad p
 
 Matrix: S = phi c_f + (alpha - phi)/K_s, B = phi beta_f.  Fracture:
 S = a c_f, B = a beta_f, and grad is the tangential gradient.  Weak form
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Optional
+from typing import Callable, Optional
 
 import numpy as np
 
@@ -43,6 +43,7 @@ class Flow:
     viscosity: Viscosity = field(default_factory=Viscosity)
     thermal_storage: float = 0.0    # B
     aperture: Optional[object] = None
+    source: Optional[Callable] = None   # s(x, t): a volume (area, on the fracture) source, 1/s
 
 
 # -- helpers ----------------------------------------------------------------------
@@ -81,11 +82,20 @@ def _storages(fl: Flow, ctx):
 
 
 # -- flow -------------------------------------------------------------------------
-def flow_f0(fl: Flow, ctx):
+def storage_rate(fl: Flow, ctx):
+    """S dp/dt - B dT/dt - s (nc, nq): the fluid stored per unit volume (area)
+    and time, less the source (without the da/dt of a deformable fracture)."""
     S, B = _storages(fl, ctx)
     r = S * ctx.dot(fl.p)[..., 0]
     if fl.T is not None and fl.thermal_storage:
         r = r - B * ctx.dot(fl.T)[..., 0]
+    if fl.source is not None:
+        r = r - np.broadcast_to(fl.source(ctx.x, ctx.t), ctx.shape)
+    return r
+
+
+def flow_f0(fl: Flow, ctx):
+    r = storage_rate(fl, ctx)
     if fl.aperture is not None:
         r = r + aperture_state(fl, ctx).adot
     return r[..., None]

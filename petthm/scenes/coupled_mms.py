@@ -170,15 +170,16 @@ class CoupledMMS(Scene):
         b.elasticity(degree, biot=True, thermal=True)
         mech = b.contact(normal_stress=-m.c.sigma0_nn, u_scale=0.05)
         b.deformable(mech)
-        b.fracture_flow(degree, reference_aperture=p.fracture_aperture, heat=True)
+        frac = m.fracture_sources()
+        b.fracture_flow(degree, reference_aperture=p.fracture_aperture, heat=True, source=frac["pf"])
         b.matrix_flow(degree, permeability=p.permeability(dim), storage=p.storage,
-                      thermal_storage=m.c.thermal_storage, heat=True)
+                      thermal_storage=m.c.thermal_storage, heat=True, source=sources["pm"])
         b.leakoff()
         b.fracture_heat(degree, reference_aperture=p.fracture_aperture, supg=supg,
-                        source=m.fracture_sources()["Tf"])
+                        source=frac["Tf"])
         b.matrix_heat(degree, source=sources["Tm"], supg=supg)
         model = b.build()
-        model.add(source_terms(m, sources))
+        model.add(source_terms(m, sources, frac["Tf_increment"]))
         sigma = m.stress_function()
         model.facets += [pe.traction("u", part, partial(_outward_traction, sigma, part))
                          for part in self.sides()]
@@ -201,11 +202,13 @@ def _outward_traction(sigma, part: str, x, t):
     return sign * sigma(x, t)[..., :, axis]
 
 
-def source_terms(m: CoupledSolution, sources: dict) -> tuple[list, list]:
-    """The manufactured right-hand sides that the heat builders do not take
-    (-int w f): f_u and f_p on the cells, g_pf on the fracture, and the
-    face loads h of each half on the trace of u that lies in it (the half
-    the fracture normal points into is the + face)."""
+def source_terms(m: CoupledSolution, sources: dict, increment) -> tuple[list, list]:
+    """The manufactured right-hand sides that the flow and heat builders do
+    not take (-int w f): f_u on the cells, the face loads h of each half on
+    the trace of u that lies in it (the half the fracture normal points into
+    is the + face), and + int w dt rho_f C_f da/dt dTf/dt on the fracture
+    (dt = 1/shift: backward Euler's stored energy, kernels/heat.heat_f0,
+    for the step taken, also after a rejected step)."""
     def volume(f, ctx):
         v = -f(ctx.x, ctx.t)
         return v if v.ndim == 3 else v[..., None]
@@ -214,10 +217,10 @@ def source_terms(m: CoupledSolution, sources: dict) -> tuple[list, list]:
         up = (side.sign * ctx.normals[..., -1] > 0)[..., None]           # this face lies above Gamma
         h = {s: m.face_load(s)(ctx.x, ctx.t) for s in HALVES}
         return -np.where(up, h[1], h[-1])
-    g_pf = m.fracture_sources()["pf"]
+    def stored_energy_increment(ctx):
+        return (increment(ctx.x, ctx.t) / ctx.shift if ctx.shift > 0 else np.zeros(ctx.shape))[..., None]
     res = [CellResidual("u", partial(volume, sources["u"]), None, region=MATRIX),
-           CellResidual("pm", partial(volume, sources["pm"]), None, region=MATRIX),
-           CellResidual("pf", partial(volume, g_pf), None, region=FRACTURE)]
+           CellResidual("Tf", stored_energy_increment, None, region=FRACTURE)]
     res += [CellResidual(Trace("u", side), partial(face_load, side), None, region=FRACTURE)
             for side in (Side.PLUS, Side.MINUS)]
     return res, []

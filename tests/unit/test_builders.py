@@ -64,11 +64,12 @@ def _blocks(problem):
 def test_heating_is_switched_on_by_the_option_alone(tmp_path):
     """With -thm_thermomechanical_heating the builder adds the blocks of
     section 6 (Tm-u: strain heating, Tm-pm: pore fluid, Tm-Tm: T times both
-    rates) to those of heat transport; without it, none."""
+    rates) to those of heat transport; without it, none.  Heat transport's own
+    Tm-u block is SUPG's alpha d(div u)/dt (the T div b of its residual)."""
     on, off = _blocks(biot_thm_problem(tmp_path / "on",
                                        True)), _blocks(biot_thm_problem(tmp_path / "off", False))
     print(on, off)
-    assert off[("Tm", "u")] == 0 and on[("Tm", "u")] == 1
+    assert off[("Tm", "u")] == 1 and on[("Tm", "u")] == 2
     assert on[("Tm", "pm")] == off[("Tm", "pm")] + 1 and on[("Tm", "Tm")] == off[("Tm", "Tm")] + 1
 
 
