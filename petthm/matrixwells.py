@@ -82,11 +82,8 @@ def nodes_on_interval(mesh, points: np.ndarray, perf: Perforation) -> tuple[np.n
     perforated interval, within a round-off tolerance."""
     X = mesh.point_coordinates(points)
     tol = 1e-9 * max(float(mesh.h.max()) if mesh.ncells else 1.0, perf.length)
-    b, e = np.asarray(perf.bottom, dtype=float), perf.direction
-    s = (X - b) @ e
-    off = np.linalg.norm(X - b - s[:, None] * e, axis=1)
-    on = (off < tol) & (s > -tol) & (s < perf.length + tol)
-    return X[on], s[on]
+    on = perf.contains(X, tol / perf.length)
+    return X[on], (X[on] - np.asarray(perf.bottom, dtype=float)) @ perf.direction
 
 
 def lumped_weights(s: np.ndarray, length: float) -> np.ndarray:

@@ -1,6 +1,7 @@
 """What the fracture flow and heat scenes share: the rigid-fracture physics
-(physics.md sections 4-7), the strip geometry, and a monitor of wells,
-balances and the fracture temperature's bounds.
+(physics.md sections 4-7), the strip geometry, a monitor of wells,
+balances and the fracture temperature's bounds, and the closed initial
+state of a deformable fracture under the in-situ stress (Scenes 2 and 3).
 
 Fracture fields ``pf``, ``Tf`` live on the - faces of the cohesive cells;
 the matrix fields ``pm``, ``Tm`` on the split mesh.  The interface
@@ -17,6 +18,7 @@ from .. import meshing
 from ..builders import ModelBuilder
 from ..monitors import Balances, FractureWells, TemperatureRange, Worst, fracture_balances
 from ..params import CELSIUS
+from ..errors import InputError
 from .base import Monitor
 
 
@@ -39,6 +41,37 @@ def rigid_fracture_physics(b: ModelBuilder, degree: int, *, heat: bool, permeabi
     if heat:
         b.fracture_heat(degree, reference_aperture=a)
         b.matrix_heat(degree, conductivity=rock_conductivity)
+
+
+class ClosedUnderStress:
+    """A deformable fracture that starts closed under the in-situ stress
+    (physics.md sections 3, 11): the scene's ``normal()`` gives the
+    fracture's unit normal; lam0 = sigma_n - p0 and a = ac(lam0)."""
+
+    def normal(self) -> np.ndarray:
+        raise NotImplementedError
+
+    @property
+    def normal_stress(self) -> float:
+        """The in-situ compressive normal stress on the fracture (-thm_insitu_stress)."""
+        return self.p.normal_stress(self.normal())
+
+    @property
+    def lam0(self) -> float:
+        """The initial contact traction sigma_n - p0."""
+        return self.normal_stress - self.p.initial_pressure
+
+    def initial_aperture(self) -> float:
+        """ac(lam0) of the joint law (the scales, well indices, relative outputs)."""
+        return float(ModelBuilder(self.p, 3).joint_law().closure_aperture(np.array([self.lam0]))[0][0])
+
+    def check_closed_start(self) -> None:
+        """A fluid pressure at or above the normal stress would start the fracture open: refused."""
+        p = self.p
+        if not self.lam0 > 0:
+            raise InputError(f"option -thm_initial_pressure = {p.initial_pressure:g} must be below the "
+                             f"in-situ normal stress {self.normal_stress:g} (-thm_insitu_stress): the "
+                             "fracture starts closed")
 
 
 def transmissivity(p, aperture: float, T: float) -> float:

@@ -38,7 +38,7 @@ from ..monitors import Worst, contact_node_checks, contact_node_fields
 from ..params import param
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
 from .contact import OPEN_TRACTION, contact_solver_defaults
-from .fractured import balances_of, tf_range
+from .fractured import ClosedUnderStress, balances_of, tf_range
 from .friction import slip_columns
 
 #: (T0 in degC, compressive in-situ stress in Pa) of the paper's cases 1, 2, 3
@@ -152,7 +152,7 @@ class _Scene3Monitor(Monitor):
 
 
 @register
-class InclinedPenny(Scene):
+class InclinedPenny(ClosedUnderStress, Scene):
     name = "inclined_penny"
     dimension = 3
     description = ("Scene 3: cold water between matrix wells past a deformable inclined fracture in "
@@ -231,26 +231,9 @@ class InclinedPenny(Scene):
                                           well_lines=[w.segment() for w in self.perforations()])
 
     # -- model ------------------------------------------------------------------------------
-    @property
-    def normal_stress(self) -> float:
-        return self.p.normal_stress(self.normal())
-
-    @property
-    def lam0(self) -> float:
-        return self.normal_stress - self.p.initial_pressure
-
-    def initial_aperture(self) -> float:
-        """ac(lam0): 0.2 mm (cases 1, 2) or 0.05 mm (case 3) with the paper's numbers."""
-        return float(ModelBuilder(self.p, 3).joint_law().closure_aperture(np.array([self.lam0]))[0][0])
-
     def check(self, mesh):
         p = self.p
-        if mesh.dim != 3:
-            raise InputError("inclined_penny is a 3D scene (the mesh is 2D)")
-        if not self.lam0 > 0:
-            raise InputError(f"option -thm_initial_pressure = {p.initial_pressure:g} must be below the "
-                             f"in-situ normal stress {self.normal_stress:g} (-thm_insitu_stress): the "
-                             "fracture starts closed")
+        self.check_closed_start()
         half = p.scene3_well_spacing / 2
         top = p.scene3_well_standoff + p.scene3_perforation
         if half >= self.L or top >= self.L:

@@ -34,7 +34,7 @@ from ..params import CELSIUS, param
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
 from .contact import OPEN_TRACTION, contact_solver_defaults, fracture_normal
-from .fractured import WellsMonitor, heat_wells_monitor, transmissivity
+from .fractured import ClosedUnderStress, WellsMonitor, heat_wells_monitor, transmissivity
 from .friction import slip_columns
 
 
@@ -83,12 +83,12 @@ class _Scene2Monitor(Monitor):
         closed = lam > OPEN_TRACTION * sc.lam0
         # where closed, a = a0 - lam/Kn exactly: the complementarity leaves no positive opening there
         ident = np.abs(a - self.law.closure_aperture(lam)[0])[closed]
-        out["aperture_identity"] = probes.global_max(comm, ident, empty=0.0) / sc.reference_aperture()
+        out["aperture_identity"] = probes.global_max(comm, ident, empty=0.0) / sc.initial_aperture()
         out["aperture_max"] = probes.global_max(comm, a, empty=0.0)
         out["lam_min"] = probes.global_min(comm, lam)
         out["nodes_open"] = probes.global_count(comm, ~closed)
         opening, second = contact_node_checks(problem, OPEN_TRACTION * sc.lam0, X, t)
-        out["closed_opening"] = probes.global_max(comm, [opening]) / sc.reference_aperture()
+        out["closed_opening"] = probes.global_max(comm, [opening]) / sc.initial_aperture()
         out.update(slip_columns(problem, X, t) if problem.model.friction is not None else
                    {"slip_max": np.nan, "slipping_area": np.nan})
         out["lam_roughness"] = np.nan if second is None else \
@@ -138,7 +138,7 @@ class _Scene2Monitor(Monitor):
 
 
 @register
-class PennyImpermeable(Scene):
+class PennyImpermeable(ClosedUnderStress, Scene):
     name = "penny_impermeable"
     dimension = 3
     description = ("Scene 2: cold water through a deformable penny fracture with contact in impermeable "
@@ -198,25 +198,12 @@ class PennyImpermeable(Scene):
         return [10.0 ** k for k in range(3, 10) if 10.0 ** k <= self.final_time]
 
     # -- model ----------------------------------------------------------------------------
-    @property
-    def normal_stress(self) -> float:
-        return self.p.normal_stress(fracture_normal(3))
-
-    @property
-    def lam0(self) -> float:
-        return self.normal_stress - self.p.initial_pressure
-
-    def reference_aperture(self) -> float:
-        """The initial aperture ac(lam0) (the producer's well index, the scales)."""
-        return float(ModelBuilder(self.p, 3).joint_law().closure_aperture(np.array([self.lam0]))[0][0])
+    def normal(self) -> np.ndarray:
+        return fracture_normal(3)
 
     def check(self, mesh):
         p = self.p
-        if mesh.dim != 3:
-            raise InputError("penny_impermeable is a 3D scene (the mesh is 2D)")
-        if not self.lam0 > 0:
-            raise InputError(f"option -thm_initial_pressure = {p.initial_pressure:g} must be below "
-                             f"-thm_insitu_stress = {self.normal_stress:g}: the fracture starts closed")
+        self.check_closed_start()
         if not p.scene2_well_offset < p.scene2_radius:
             raise InputError(f"option -thm_scene2_well_offset = {p.scene2_well_offset:g} must be below "
                              f"-thm_scene2_radius = {p.scene2_radius:g} (wells on the fracture)")
@@ -226,7 +213,7 @@ class PennyImpermeable(Scene):
         p = self.p
         T0, Ti = p.T0, p.T_inj
         u_scale = max(p.rock_thermal_expansion * abs(T0 - Ti) * p.scene2_radius / 3, 1e-6 * p.scene2_radius)
-        a_ref = self.reference_aperture()
+        a_ref = self.initial_aperture()
         b = ModelBuilder(p, 3)
         b.elasticity(degree, thermal=True)
         mech = b.contact(normal_stress=self.normal_stress, u_scale=u_scale)
