@@ -97,11 +97,13 @@ def solver_costs() -> dict:
 
 
 def peak_memory_mb() -> dict:
-    """Peak resident memory (MB): the largest rank's and the sum over ranks."""
+    """Peak resident memory (MB): the largest rank's, rank 0's (which reads
+    and meshes before the distribution) and the sum over ranks."""
     import resource
     mine = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0      # kB on Linux
     comm = PETSc.COMM_WORLD.tompi4py()
-    return {"max_rank": comm.allreduce(mine, op=_mpi_max()), "total": comm.allreduce(mine)}
+    return {"max_rank": comm.allreduce(mine, op=_mpi_max()), "rank0": comm.bcast(mine, root=0),
+            "total": comm.allreduce(mine)}
 
 
 def _mpi_max():
