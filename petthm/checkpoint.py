@@ -29,6 +29,7 @@ import signal
 import numpy as np
 
 from .errors import InputError
+from .output import in_turns
 
 FILE = "checkpoint.h5"
 SIGNALS = ("SIGTERM", "SIGINT", "SIGUSR1")
@@ -79,15 +80,15 @@ def write(directory: str, X, dm, meta: dict) -> None:
     idx = _block_indices(offset[owned], ndof[owned])
     part = {"point": key[owned], "ndof": ndof[owned], "value": values[idx].copy()}
     dm.restoreLocalVec(Xl)
-    for r in range(comm.size):                                  # one rank at a time
-        if comm.rank == r:
-            with h5py.File(tmp, "w" if r == 0 else "a") as h5:
-                if r == 0:
-                    for k, v in dict(meta, ranks=comm.size, size=X.getSize()).items():
-                        h5.attrs[k] = v
-                for name, arr in part.items():
-                    h5[f"{name}/{r}"] = arr
-        comm.barrier()
+
+    def write_part(r):
+        with h5py.File(tmp, "w" if r == 0 else "a") as h5:
+            if r == 0:
+                for k, v in dict(meta, ranks=comm.size, size=X.getSize()).items():
+                    h5.attrs[k] = v
+            for name, arr in part.items():
+                h5[f"{name}/{r}"] = arr
+    in_turns(comm, write_part)
     if comm.rank == 0:
         os.replace(tmp, path)
     comm.barrier()

@@ -1,7 +1,7 @@
 """Run output: summary.json, history.csv and P1/P2 fields in XDMF/HDF5.
 
-physics.md section 12.  Fields are gathered to rank 0 and written with h5py
-into ``fields.h5``; ``fields.xdmf`` describes the time series
+physics.md section 12.  Each rank writes its own part of the fields into
+``fields.h5`` (h5py, ranks in turn: ``in_turns``); ``fields.xdmf`` describes the time series
 (``Triangle``/``Tetrahedron`` for P1, ``Triangle_6``/``Tetrahedron_10`` for
 P2, VTK node order) so that ParaView or meshio can read it.  Values are in SI
 units, temperatures in degrees Celsius.
@@ -11,7 +11,7 @@ from __future__ import annotations
 import csv
 import json
 import os
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -59,9 +59,30 @@ def write_summary(path: str, summary: dict, rank: int) -> None:
         os.replace(path + ".tmp", path)
 
 
+def in_turns(comm, write: Callable[[int], None]) -> None:
+    """Call ``write(rank)`` on one rank after the other, rank 0 first
+    (collective).  h5py without MPI-IO cannot open a file on several ranks at
+    once; taking turns lets each rank write its own part of one file, so
+    nothing of field size is gathered on a rank (memory per rank stays that
+    of its part; the writes are serial in time)."""
+    for r in range(comm.size):
+        if comm.rank == r:
+            write(r)
+        comm.barrier()
+
+
 class FieldWriter:
     """Time series of nodal fields on the matrix mesh, or (``Domain.FRACTURE``)
-    on the fracture surface (the - faces), one degree for all."""
+    on the fracture surface (the - faces), one degree for all.
+
+    ``STEM.h5`` holds the mesh (``mesh/topology``: the node numbers of every
+    cell, ``mesh/geometry``, ``mesh/partition``: the rank that wrote each
+    cell) and ``fields/NAME/K`` for output K, numbered as the distributed
+    mesh numbers its nodes: each rank writes the rows of the nodes it owns
+    (a contiguous range) and of its cells, ranks in turn (``in_turns``).
+    A restart whose partition differs writes its mesh anew (``mesh_1``, ...);
+    the attribute ``meshes`` names each output's mesh group, and
+    ``read_output`` reads an output with its mesh."""
 
     def __init__(self, disc: Discretisation, directory: str, degree: int, stem: str = "fields",
                  region: Domain = Domain.MATRIX, resume_at: float | None = None):
@@ -74,77 +95,122 @@ class FieldWriter:
         self.h5path = os.path.join(directory, stem + ".h5")
         self.xdmfpath = os.path.join(directory, stem + ".xdmf")
         self.h5name = stem + ".h5"
+        #: per output: (time, [(field, ncomp)], mesh group, cells, nodes)
+        self._steps: list[tuple[float, list[tuple[str, int]], str, int, int]] = []
         dmo = mesh.dm.clone()
         regions = {} if region is Domain.MATRIX else {region: disc.regions[region]}
         nodes = Discretisation(mesh, [FieldSpec("node", 1, degree, region)], dm=dmo, regions=regions)
-        gid = nodes.global_index
-        self.local_gid = gid[nodes.field_local_dofs("node")[:, 0]]
-        conn = gid[nodes.elem_dofs["node"]]
-        coords = nodes.field_node_coordinates("node")
-        self.nnodes = self.comm.allreduce(int(nodes._owned(gid).sum()))
-        self._nodes_disc = nodes
-        self._steps: list[tuple[float, list[tuple[str, int]]]] = []
-        conn_all = self.comm.gather(conn, root=0)
-        xyz = self._gather_nodal(coords)
-        if self.rank == 0:
-            import h5py
-            os.makedirs(directory, exist_ok=True)
-            self.ncells = sum(len(c) for c in conn_all)
-            if resume_at is not None and os.path.isfile(self.h5path):
-                self._resume(resume_at)
-            else:
-                with h5py.File(self.h5path, "w") as h5:
-                    h5["mesh/topology"] = np.concatenate(conn_all).astype(np.int64)
-                    h5["mesh/geometry"] = xyz
+        mesh_parts = self._number_nodes(nodes)
         dmo.destroy()
+        if self.rank == 0:
+            os.makedirs(directory, exist_ok=True)
+        resume = resume_at is not None and os.path.isfile(self.h5path)
+        self.group, new_mesh = self._resume(resume_at, mesh_parts) if resume else ("mesh", True)
+        if new_mesh:
+            self._write_parts({f"{self.group}/{k}": v for k, v in mesh_parts.items()},
+                              mode="a" if resume else "w")
 
-    def _resume(self, t: float) -> None:
-        """Go on with the series of an earlier run (restart): keep its steps
-        up to time t, drop the later ones (rank 0)."""
+    def _number_nodes(self, nodes: Discretisation) -> dict:
+        """This rank's rows of the mesh datasets; sets the node and cell ranges."""
+        gid = nodes.global_index
+        local_gid = gid[nodes.field_local_dofs("node")[:, 0]]
+        owned = nodes._owned(local_gid)
+        self._rows = np.flatnonzero(owned)[np.argsort(local_gid[owned])]   # local nodes by row
+        self.node_range = nodes.ownership_range()
+        if len(self._rows) != self.node_range[1] - self.node_range[0]:
+            raise RuntimeError("output nodes owned by a rank are not its ownership range")
+        conn = gid[nodes.elem_dofs["node"]].astype(np.int64)
+        first = self.comm.exscan(len(conn)) or 0
+        self.cell_range = (first, first + len(conn))
+        self.ncells = self.comm.allreduce(len(conn))
+        self.nnodes = self.comm.allreduce(len(self._rows))
+        npc = self.comm.allreduce(conn.shape[1] if len(conn) else 0, op=_max())
+        coords = nodes.field_node_coordinates("node")[self._rows]
+        return {"topology": (conn, (self.ncells, npc), self.cell_range, np.int64),
+                "geometry": (coords, (self.nnodes, self.dim), self.node_range, float),
+                "partition": (np.full(len(conn), self.rank, dtype=np.int32), (self.ncells,),
+                              self.cell_range, np.int32)}
+
+    def _write_parts(self, parts: dict, mode: str = "a", attrs: dict | None = None) -> None:
+        """Datasets NAME: (this rank's rows, global shape, (first, end) row, dtype):
+        rank 0 creates them (``mode`` "w": a new file), then every rank
+        writes its rows (collective)."""
         import h5py
-        with h5py.File(self.h5path, "a") as h5:
-            times = list(h5.attrs.get("times", []))
-            keep = sum(1 for s in times if s <= t * (1 + 1e-12) + 1e-300)
-            for name in list(h5.get("fields", {})):
-                for k in list(h5["fields"][name]):
-                    if int(k) >= keep:
-                        del h5["fields"][name][k]
-            h5.attrs["times"] = times[:keep]
-            for k, s in enumerate(times[:keep]):
-                data = [(name, h5["fields"][name][str(k)]) for name in h5.get("fields", {})
-                        if str(k) in h5["fields"][name]]
-                entries = [(name, 1 if d.ndim == 1 else d.shape[1]) for name, d in data]
-                self._steps.append((s, entries))
 
-    def _gather_nodal(self, values: np.ndarray) -> np.ndarray | None:
-        parts = self.comm.gather((self.local_gid, np.asarray(values)), root=0)
-        if self.rank != 0:
-            return None
-        filled = [(g, v) for g, v in parts if len(g)]         # ranks without nodes send nothing
-        ncomp = filled[0][1].reshape(len(filled[0][0]), -1).shape[1] if filled else 1
-        out = np.zeros((self.nnodes, ncomp))
-        for g, v in filled:
-            out[g] = v.reshape(len(g), ncomp)
-        return out[:, 0] if ncomp == 1 else out
+        def write(rank):
+            with h5py.File(self.h5path, mode if rank == 0 else "a") as h5:
+                for name, (rows, shape, (lo, hi), dtype) in parts.items():
+                    if rank == 0:
+                        h5.create_dataset(name, shape=shape, dtype=dtype)
+                    if hi > lo:
+                        h5[name][lo:hi] = rows
+                if rank == 0 and attrs:
+                    for k, v in attrs.items():
+                        h5.attrs[k] = v
+        in_turns(self.comm, write)
+
+    def _resume(self, t: float, mesh_parts: dict) -> tuple[str, bool]:
+        """Go on with the series of an earlier run (restart): keep its outputs
+        up to time t, drop the later ones.  Returns the mesh group to go on
+        with, and whether it is new: the last one if it holds this run's mesh
+        (same partition), else a new name (collective)."""
+        import h5py
+        if self.rank == 0:
+            with h5py.File(self.h5path, "a") as h5:
+                times = list(h5.attrs.get("times", []))
+                keep = sum(1 for s in times if s <= t * (1 + 1e-12) + 1e-300)
+                groups = [str(g) for g in h5.attrs.get("meshes", ["mesh"] * len(times))][:keep]
+                for name in list(h5.get("fields", {})):
+                    for k in list(h5["fields"][name]):
+                        if int(k) >= keep:
+                            del h5["fields"][name][k]
+                h5.attrs["times"], h5.attrs["meshes"] = times[:keep], groups
+                for k, s in enumerate(times[:keep]):
+                    data = [(name, h5["fields"][name][str(k)]) for name in h5.get("fields", {})
+                            if str(k) in h5["fields"][name]]
+                    cells, nodes = (h5[f"{groups[k]}/{d}"].shape[0] for d in ("topology", "geometry"))
+                    self._steps.append((s, [(name, 1 if d.ndim == 1 else d.shape[1]) for name, d in data],
+                                        groups[k], cells, nodes))
+                last = groups[-1] if groups else "mesh"
+                taken = sorted(g for g in h5 if g.startswith("mesh"))
+        self._steps, last, taken = self.comm.bcast(
+            (self._steps, last, taken) if self.rank == 0 else None, root=0)
+        if self._same_mesh(last, mesh_parts):
+            return last, False
+        return next(f"mesh_{i}" for i in range(1, len(taken) + 1) if f"mesh_{i}" not in taken), True
+
+    def _same_mesh(self, group: str, mesh_parts: dict) -> bool:
+        """Whether group holds this run's mesh: each rank compares its own rows
+        (collective)."""
+        import h5py
+        same = True
+        with h5py.File(self.h5path, "r") as h5:
+            for name in ("topology", "geometry"):
+                rows, shape, (lo, hi), _ = mesh_parts[name]
+                d = h5.get(f"{group}/{name}")
+                same &= d is not None and d.shape == shape and np.array_equal(d[lo:hi], rows)
+        return bool(self.comm.allreduce(int(same), op=_min()))
 
     def write(self, t: float, fields: dict[str, np.ndarray]) -> None:
-        """Write nodal arrays (local nodes of this writer's degree, SI) at time t."""
+        """Write nodal arrays (local nodes of this writer's degree, SI) at time t
+        (collective: every rank passes the same names)."""
         k = len(self._steps)
-        entries = []
-        gathered = {name: self._gather_nodal(v) for name, v in fields.items()}
+        parts, entries = {}, []
+        for name, values in fields.items():
+            arr = np.asarray(values, dtype=float)
+            ncomp = self.comm.allreduce(arr.size // len(arr) if len(arr) else 0, op=_max())
+            arr = arr.reshape(len(arr), ncomp)[self._rows]
+            if ncomp == 2:                                   # XDMF vectors have 3 components
+                arr, ncomp = np.column_stack([arr, np.zeros(len(arr))]), 3
+            shape = (self.nnodes,) if ncomp == 1 else (self.nnodes, ncomp)
+            rows = arr.reshape((len(arr),) + shape[1:])
+            parts[f"fields/{name}/{k}"] = (rows, shape, self.node_range, float)
+            entries.append((name, ncomp))
+        self._steps.append((t, entries, self.group, self.ncells, self.nnodes))
+        self._write_parts(parts, attrs={"times": [s[0] for s in self._steps],
+                                        "meshes": [s[2] for s in self._steps]})
         if self.rank == 0:
-            import h5py
-            with h5py.File(self.h5path, "a") as h5:
-                for name, arr in gathered.items():
-                    if arr.ndim == 2 and arr.shape[1] == 2:
-                        arr = np.column_stack([arr, np.zeros(len(arr))])
-                    h5[f"fields/{name}/{k}"] = arr
-                    entries.append((name, arr.shape[1] if arr.ndim == 2 else 1))
-                h5.attrs["times"] = [s for s, _ in self._steps] + [t]
-            self._steps.append((t, entries))
             self._write_xdmf()
-        else:
-            self._steps.append((t, entries))
 
     def _write_xdmf(self) -> None:
         topo, npc = TOPOLOGY[(self.rdim, self.degree)]
@@ -152,17 +218,17 @@ class FieldWriter:
         geo = "XY" if self.dim == 2 else "XYZ"
         out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0">', "<Domain>",
                '<Grid Name="TimeSeries" GridType="Collection" CollectionType="Temporal">']
-        for k, (t, entries) in enumerate(self._steps):
+        for k, (t, entries, group, ncells, nnodes) in enumerate(self._steps):
             out += [f'<Grid Name="step{k}" GridType="Uniform">', f'<Time Value="{t!r}"/>',
-                    f'<Topology TopologyType="{topo}" NumberOfElements="{self.ncells}"{per}>',
-                    f'<DataItem Dimensions="{self.ncells} {npc}" NumberType="Int" Precision="8" '
-                    f'Format="HDF">{self.h5name}:/mesh/topology</DataItem>', "</Topology>",
+                    f'<Topology TopologyType="{topo}" NumberOfElements="{ncells}"{per}>',
+                    f'<DataItem Dimensions="{ncells} {npc}" NumberType="Int" Precision="8" '
+                    f'Format="HDF">{self.h5name}:/{group}/topology</DataItem>', "</Topology>",
                     f'<Geometry GeometryType="{geo}">',
-                    f'<DataItem Dimensions="{self.nnodes} {self.dim}" Format="HDF">'
-                    f'{self.h5name}:/mesh/geometry</DataItem>', "</Geometry>"]
+                    f'<DataItem Dimensions="{nnodes} {self.dim}" Format="HDF">'
+                    f'{self.h5name}:/{group}/geometry</DataItem>', "</Geometry>"]
             for name, ncomp in entries:
                 kind = "Scalar" if ncomp == 1 else "Vector"
-                dims = f"{self.nnodes}" if ncomp == 1 else f"{self.nnodes} {ncomp}"
+                dims = f"{nnodes}" if ncomp == 1 else f"{nnodes} {ncomp}"
                 out += [f'<Attribute Name="{name}" AttributeType="{kind}" Center="Node">',
                         f'<DataItem Dimensions="{dims}" Format="HDF">{self.h5name}:/fields/{name}/{k}'
                         "</DataItem>", "</Attribute>"]
@@ -173,5 +239,27 @@ class FieldWriter:
         os.replace(self.xdmfpath + ".tmp", self.xdmfpath)
 
 
+def read_output(h5path: str, step: int = -1) -> tuple[np.ndarray, np.ndarray, float, dict]:
+    """(geometry, topology, time, {field: values}) of output ``step`` of a
+    ``fields.h5`` / ``fracture.h5`` (its own mesh group, after a restart too)."""
+    import h5py
+    with h5py.File(h5path, "r") as h5:
+        times = list(h5.attrs["times"])
+        k = range(len(times))[step]
+        group = str(list(h5.attrs.get("meshes", ["mesh"] * len(times)))[k])
+        fields = {name: h5["fields"][name][str(k)][()] for name in h5.get("fields", {})
+                  if str(k) in h5["fields"][name]}
+        return h5[f"{group}/geometry"][()], h5[f"{group}/topology"][()], float(times[k]), fields
 
-__all__ = ["History", "FieldWriter", "write_summary"]
+
+def _max():
+    from mpi4py import MPI
+    return MPI.MAX
+
+
+def _min():
+    from mpi4py import MPI
+    return MPI.MIN
+
+
+__all__ = ["History", "FieldWriter", "in_turns", "read_output", "write_summary"]

@@ -195,17 +195,20 @@ def _history(d):
 
 def _final_fields(d):
     import h5py
+
+    from petthm.output import read_output
     out = {}
     for name in sorted(os.listdir(d)):
-        if not name.endswith(".h5"):
+        if not name.endswith(".h5") or name == "checkpoint.h5":
             continue
         with h5py.File(os.path.join(d, name), "r") as h5:
-            xyz = h5["mesh/geometry"][...]
-            order = np.lexsort(np.round(xyz, 9).T[::-1])
-            for f in h5.get("fields", {}):
-                steps = sorted(h5[f"fields/{f}"], key=int)
-                v = h5[f"fields/{f}/{steps[-1]}"][...][order]
-                out[f"{name}:{f}"] = (np.sort(v, axis=0), len(steps))  # + and - copies of a node coincide
+            if "times" not in h5.attrs:
+                continue
+            nsteps = len(h5.attrs["times"])
+        xyz, _, _, fields = read_output(os.path.join(d, name))   # the last output, on its own mesh
+        order = np.lexsort(np.round(xyz, 9).T[::-1])
+        for f, v in fields.items():
+            out[f"{name}:{f}"] = (np.sort(v[order], axis=0), nsteps)  # + and - copies of a node coincide
     return out
 
 

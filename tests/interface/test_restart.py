@@ -13,6 +13,8 @@ import h5py
 import numpy as np
 import pytest
 
+from petthm.output import read_output
+
 from conftest import MPI_ENV, ROOT, run_petthm
 
 LAUWERIER = ("lauwerier", ("-thm_final_time", 1e6))
@@ -48,6 +50,13 @@ def _final_state(outdir):
         meta = dict(h5.attrs)
     blocks = np.split(value, np.cumsum(ndof)[:-1])
     return np.concatenate([blocks[i] for i in np.argsort(point)]), meta
+
+
+def _final_output(outdir, name="Tm"):
+    """The last output of ``fields.h5`` (read on its own mesh), nodes sorted by coordinates."""
+    xyz, _, _, fields = read_output(str(outdir / "fields.h5"))
+    order = np.lexsort(np.round(xyz, 9).T[::-1])
+    return xyz[order], fields[name][order]
 
 
 def _times(outdir):
@@ -97,12 +106,19 @@ def test_signal_checkpoints_and_stops_then_restart_on_two_ranks_or_one(tmp_path)
     assert os.path.exists(out / "checkpoint.h5") and s["final_time"] < 1e6
     shutil.copytree(out, tmp_path / "serial")
     x_ref, _ = _final_state(tmp_path / "ref")
+    field_ref = _final_output(tmp_path / "ref")
     for folder, ranks in ((out, 2), (tmp_path / "serial", 1)):
         _, s = run_petthm(scene, folder, "-thm_restart", folder, *options, ranks=ranks)
         x, _ = _final_state(folder)
         print(ranks, "rank(s): relative difference", np.abs(x - x_ref).max() / np.abs(x_ref).max())
         assert s["status"] == "completed"
         assert np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
+        field = _final_output(folder)              # the output series goes on, on the restart's mesh
+        assert np.array_equal(field[0], field_ref[0])
+        assert np.abs(field[1] - field_ref[1]).max() <= 1e-10 * np.abs(field_ref[1]).max()
+    with h5py.File(tmp_path / "serial" / "fields.h5", "r") as h5:
+        meshes = list(h5.attrs["meshes"])      # 1 rank numbers the nodes unlike 2: a new mesh group
+        assert meshes[0] == "mesh" and meshes[-1] == "mesh_1" and "mesh_1/geometry" in h5
 
 
 def test_sigterm_stops_a_serial_run(tmp_path):

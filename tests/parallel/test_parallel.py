@@ -1,7 +1,8 @@
 """2 and 3 ranks reproduce the serial result (fields compared node by node)."""
-import h5py
 import numpy as np
 import pytest
+
+from petthm.output import read_output
 
 from conftest import ROOT, run_petthm
 
@@ -21,10 +22,8 @@ def solver_without_parallel_direct() -> tuple:
 
 def final_field(outdir, name="Tm"):
     """Final nodal field sorted by node coordinates (numbering differs across ranks)."""
-    with h5py.File(outdir / "fields.h5", "r") as h5:
-        xyz = h5["mesh/geometry"][...]
-        steps = sorted(h5[f"fields/{name}"], key=int)
-        v = h5[f"fields/{name}/{steps[-1]}"][...]
+    xyz, _, _, fields = read_output(str(outdir / "fields.h5"))
+    v = fields[name]
     order = np.lexsort(np.round(xyz, 12).T[::-1])
     return xyz[order], v[order]
 
