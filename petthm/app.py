@@ -152,6 +152,7 @@ class Run:
             self.outdir = run.restart
         self.stage_wall = {}
         self.t_start = time.perf_counter()
+        self._last_checkpoint = self.t_start
         self.mesh_path = run.mesh_file
         written = os.path.join(run.restart, "mesh.msh") if run.restart else ""
         if not self.mesh_path and written and os.path.isfile(written):
@@ -324,7 +325,7 @@ class Run:
                 check_unused_petsc_options()
             if step % interval == 0 or t >= control.final_time * (1 - 1e-12) or hit(t, control.hit_times):
                 write_fields(t)                           # and at the times the scene lands on
-            if run.checkpoint_interval and step % run.checkpoint_interval == 0 and step > 0:
+            if step > 0 and self._checkpoint_due(step):
                 self._checkpoint(stepper)
             reason = scene_monitor.stop_reason()
             if reason:
@@ -347,7 +348,8 @@ class Run:
         with petsc_option_errors("the solver options (-ts_*, -snes_*, -ksp_*, -pc_*)"):
             stepper = TimeStepper(problem, control, monitor)
         if resume:
-            stepper.resume(resume["time"], resume["dt"], resume["step"])
+            stepper.resume(resume["time"], resume["dt"], resume["step"],
+                           {k: resume[k] for k in stepper.schedule_state() if k in resume})
         st, t0 = self._stage("solve")
         state["wall"] = time.perf_counter()
         stop.install()
@@ -416,11 +418,22 @@ class Run:
              f"t = {meta['time']:.6g} s, step {meta['step']}")
         return meta
 
+    def _checkpoint_due(self, step: int) -> bool:
+        """Every -thm_checkpoint_interval steps, or when -thm_checkpoint_wall
+        seconds have passed since the last checkpoint (rank 0's clock decides)."""
+        run = self.scene.run
+        if run.checkpoint_interval and step % run.checkpoint_interval == 0:
+            return True
+        return bool(run.checkpoint_wall) and self.comm.tompi4py().bcast(
+            time.perf_counter() - self._last_checkpoint >= run.checkpoint_wall, root=0)
+
     def _checkpoint(self, stepper) -> None:
+        self._last_checkpoint = time.perf_counter()
         ts = stepper.ts
         checkpoint.write(self.outdir, self.problem.X, self.problem.dm, {
             "scene": self.scene.name, "time": ts.getTime(), "dt": ts.getTimeStep(),
-            "step": ts.getStepNumber(), "rejected": ts.getStepRejections()})
+            "step": ts.getStepNumber(), "rejected": ts.getStepRejections(),
+            **stepper.schedule_state()})
 
     @staticmethod
     def _si_out(problem, name, t):

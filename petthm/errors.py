@@ -14,19 +14,28 @@ class petsc_option_errors:
     ``-pc_type``, a value out of range such as ``-dm_refine -1``) into an
     ``InputError`` with PETSc's own message (the last line of the error
     stack that petsc4py puts in the exception), instead of a Python
-    traceback.  ``what`` says what was being set up ("the solver options")."""
+    traceback.  ``what`` says what was being set up ("the solver options");
+    ``codes``: convert only these PETSc error codes (where other errors than
+    the options' can arise, as in a preconditioner's set-up)."""
 
-    def __init__(self, what: str):
+    def __init__(self, what: str, codes: tuple[int, ...] | None = None):
         self.what = what
+        self.codes = codes
 
     def __enter__(self):
         return self
 
     def __exit__(self, kind, error, tb):
         from petsc4py import PETSc
-        if kind is not None and issubclass(kind, PETSc.Error):
+        if kind is not None and issubclass(kind, PETSc.Error) and (
+                self.codes is None or getattr(error, "ierr", None) in self.codes):
             raise InputError(f"PETSc refused {self.what}: {_petsc_message(error)}") from None
         return False
+
+
+#: PETSc's error codes for a wrong option value: PETSC_ERR_ARG_WRONG,
+#: PETSC_ERR_ARG_OUTOFRANGE, PETSC_ERR_UNKNOWN_TYPE
+OPTION_ERRORS = (62, 63, 86)
 
 
 def _petsc_message(error) -> str:

@@ -25,7 +25,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from . import compat, probes
-from .errors import InputError
+from .errors import OPTION_ERRORS, InputError, petsc_option_errors
 
 #: the attribute of a PC through which ``solver.TimeStepper`` gives a Python
 #: PC the ``SolverContext`` it serves (a weak reference)
@@ -288,8 +288,10 @@ class VIFieldSplit:
             if Sp is not None:
                 split.iset.compose("pmat", Sp)
                 self._owned.append(Sp)
-        self.inner.setFromOptions()
-        self.inner.setUp()
+        with petsc_option_errors(f"the options of the block recipe (-{self.inner.getOptionsPrefix()}*)",
+                                 OPTION_ERRORS):
+            self.inner.setFromOptions()          # the splits read theirs in the set-up
+            self.inner.setUp()
 
     def _contact_maps(self, context, P, splits):
         """The contact maps of the first split when it holds u and lam."""

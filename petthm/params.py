@@ -191,6 +191,8 @@ class RunParams:
                            "than this (checked before meshing, from the far-field size)", lo=1)
     checkpoint_interval: int = param(10, "steps", "write checkpoint.h5 every N accepted steps (0: only "
                                      "at the end and when a signal stops the run)", lo=0)
+    checkpoint_wall: float = param(0.0, "s", "also write checkpoint.h5 when this much wall time has "
+                                   "passed since the last one (0: by steps only)", lo=0.0)
     restart: str = param("", "-", "continue the run whose output folder this is, from its "
                          "checkpoint.h5 (same options and rank count; output goes on in that folder)")
     pc_reuse: str = param("auto", "-", "reuse the preconditioner across Newton iterations and time "

@@ -162,6 +162,10 @@ def _reason_name(kind, value: int) -> str:
     return f"{preferred[0] if preferred else 'REASON'} ({int(value)})"
 
 
+#: a step cut by rejected tries grows back by this factor per accepted step (or
+#: the schedule's growth, if larger) until it reaches the schedule's step again
+RECOVERY = 2.0
+
 #: preconditioners that are a direct solve (``-thm_pc_reuse auto`` reuses them)
 DIRECT_PCS = ("lu", "cholesky", "redundant")
 
@@ -217,8 +221,16 @@ class TimeStepper:
         self.error = None
         self.stopped: str | None = None
         self.failure: str | None = None          # why the run was stopped as failed (not a TS reason)
-        self._last_dt_cut = None
+        self._start_schedule(control, ts.getTimeStep())
         self._reported = None                    # (step, t) the user's monitor saw last
+
+    def _start_schedule(self, control: StepControl, first_dt: float) -> None:
+        """The step schedule's memory (``_post_step``), before the first step."""
+        self.control = control
+        self._last_dt_cut = None                 # the step a hit time cut short, to go on with
+        self._proposed = first_dt                # the step proposed for the step being taken
+        self._recover_to = None                  # the schedule's step, while a cut step grows back
+        self._rejections_seen = 0
 
     def _set_field_splits(self, pc):
         """A field-split preconditioner gets one split per field, named by the
@@ -254,10 +266,20 @@ class TimeStepper:
                             f"(below {c.dt_floor():.3g} s, after rejected steps): the run cannot go on")
             self._stop_now()
             return
-        dt = min(ts.getTimeStep() * c.growth, c.dt_max)
-        if self._last_dt_cut is not None:        # resume the growth sequence after a hit
+        taken = ts.getTimeStep()
+        cut = ts.getStepRejections() > self._rejections_seen       # rejected tries cut this step
+        self._rejections_seen = ts.getStepRejections()
+        dt = min(taken * c.growth, c.dt_max)
+        if cut and self._recover_to is None:
+            self._recover_to = self._proposed
+        if self._recover_to is not None:        # grow back to where the schedule would be
+            self._recover_to = min(self._recover_to * c.growth, c.dt_max)
+            dt = min(max(RECOVERY, c.growth) * taken, self._recover_to)
+            if dt >= self._recover_to * (1 - 1e-12):
+                self._recover_to = None
+        if self._last_dt_cut is not None and not cut:    # resume the growth sequence after a hit
             dt = min(self._last_dt_cut, c.dt_max)
-            self._last_dt_cut = None
+        self._last_dt_cut = None
         remaining = c.final_time - t
         upcoming = [h - t for h in c.hit_times if h - t > 1e-9 * max(abs(t), 1.0)]
         if upcoming and min(upcoming) < dt * (1 + 1e-9):
@@ -265,6 +287,7 @@ class TimeStepper:
             dt = min(upcoming)
         if remaining > 0:
             ts.setTimeStep(min(dt, remaining))
+        self._proposed = dt
         self._monitor(ts, ts.getStepNumber(), t, ts.getSolution())
 
     def _monitor(self, ts, step, t, X):
@@ -289,11 +312,21 @@ class TimeStepper:
             self.error = e
             self._stop_now()
 
-    def resume(self, t: float, dt: float, step: int) -> None:
-        """Continue a run from a checkpoint: its time, next step and step number."""
+    def resume(self, t: float, dt: float, step: int, schedule: dict | None = None) -> None:
+        """Continue a run from a checkpoint: its time, next step, step number
+        and ``schedule_state``."""
         self.ts.setTime(t)
         self.ts.setTimeStep(dt)
         self.ts.setStepNumber(step)
+        self._proposed = dt
+        for name, value in (schedule or {}).items():
+            setattr(self, "_" + name, None if math.isnan(value) else float(value))
+
+    def schedule_state(self) -> dict:
+        """What the step schedule remembers beyond the next step (NaN: nothing):
+        the step a hit time cut short, the step a rejected step grows back to."""
+        return {k: math.nan if getattr(self, "_" + k) is None else getattr(self, "_" + k)
+                for k in ("last_dt_cut", "recover_to")}
 
     def request_stop(self, message: str) -> None:
         """Stop after the current step (from the monitor; collective): the

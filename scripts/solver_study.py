@@ -44,7 +44,8 @@ COLUMNS = [("solver", "solver", ""), ("level", "level", ""), ("ranks", "ranks", 
            ("max Krylov / Newton", "krylov_per_newton_max", ".1f"),
            ("PC set-ups", "pc_setups", ""), ("PCSetUp (s)", "pc_setup_s", ".2f"),
            ("KSPSolve (s)", "ksp_solve_s", ".2f"), ("wall (s)", "wall_s", ".2f"),
-           ("peak MB / rank", "peak_mb_rank", ".0f"), ("status", "status", "")]
+           ("peak MB / rank", "peak_mb_rank", ".0f"), ("peak MB rank 0", "peak_mb_rank0", ".0f"),
+           ("status", "status", "")]
 
 
 def run_case(scene, out, opts, ranks):
@@ -78,6 +79,7 @@ def row_of(name, level, ranks, out, proc):
             "ksp_solve_s": costs.get("KSPSolve", {}).get("time", 0.0),
             "wall_s": s["wall_time"]["total"],
             "peak_mb_rank": s.get("peak_memory_mb", {}).get("max_rank", 0.0),
+            "peak_mb_rank0": s.get("peak_memory_mb", {}).get("rank0", 0.0),
             "status": s["status"]}
 
 

@@ -2,6 +2,7 @@
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from conftest import ROOT, run_petthm
@@ -96,6 +97,16 @@ def test_bad_petsc_option_values_are_one_line_errors(tmp_path, opts, words):
     assert all(w in msg for w in words), msg
 
 
+def test_a_bad_option_of_the_block_recipe_is_a_one_line_error(tmp_path):
+    """Issue 15: an option value the block recipe's inner solvers refuse
+    surfaces at the first preconditioner set-up; it used to end in a
+    traceback and a segmentation fault, now a one-line error (exit 2)."""
+    proc, _ = run_petthm("contact_patch", tmp_path, "-options_file", f"{ROOT}/options/solvers/block.opts",
+                         "-vi_fieldsplit_mech_pc_type", "foo", check=False)
+    msg = _one_line_error(proc)
+    assert "the block recipe (-vi_*)" in msg and "PC type foo" in msg, msg
+
+
 @pytest.mark.parametrize("scene,opts", [
     ("lauwerier", ()),
     ("penny_impermeable", ("-options_file", f"{ROOT}/options/scenes/penny_impermeable.opts",
@@ -143,6 +154,69 @@ def test_a_collapsed_time_step_is_a_failure():
     assert not c.collapsed(1e-11, 1.0)                   # landing on the end time
     long_run = StepControl(final_time=1e9, dt_initial=1e-3)
     assert not long_run.collapsed(1e-3, 1e-3)             # a small first step is not a collapse
+
+
+class _ScheduleTS:
+    """The part of a TS that TimeStepper._post_step uses: steps of the
+    proposed size, except the tries ``cuts`` names (step number -> how
+    many tries were rejected, each cutting the step by 4 as TS does)."""
+
+    def __init__(self, dt, cuts):
+        from petsc4py import PETSc
+        self.comm, self.t, self.dt, self.n, self.rejections, self.cuts = PETSc.COMM_SELF, 0.0, dt, 0, 0, cuts
+
+    def advance(self):
+        for _ in range(self.cuts.get(self.n + 1, 0)):
+            self.dt, self.rejections = self.dt / 4, self.rejections + 1
+        self.t, self.n = self.t + self.dt, self.n + 1
+
+    def getTime(self):
+        return self.t
+
+    def getTimeStep(self):
+        return self.dt
+
+    def setTimeStep(self, dt):
+        self.dt = dt
+
+    def getStepRejections(self):
+        return self.rejections
+
+    def getStepNumber(self):
+        return self.n
+
+    def getSolution(self):
+        return None
+
+
+def _steps(control, cuts, n):
+    from petthm.solver import TimeStepper
+    stepper = TimeStepper.__new__(TimeStepper)          # the schedule alone, without a problem
+    stepper._start_schedule(control, control.dt_initial)
+    stepper._user_monitor = None
+    ts = _ScheduleTS(control.dt_initial, cuts)
+    taken = []
+    for _ in range(n):
+        ts.advance()
+        taken.append(ts.dt)
+        stepper._post_step(ts)
+    return np.array(taken)
+
+
+@pytest.mark.parametrize("growth", [1.0, 1.1])
+def test_a_step_cut_by_rejections_grows_back_to_the_schedule(growth):
+    """Issue 15: a step cut by rejected tries grows back (x2 per accepted
+    step) to where the schedule would be, in a constant schedule (it used
+    to stay cut for the rest of the run) and a geometric one (it used to
+    grow back at x1.1); without rejections the schedule is unchanged."""
+    from petthm.solver import StepControl
+    c = StepControl(final_time=1e9, dt_initial=1.0, growth=growth, dt_max=5.0)
+    plain = _steps(c, {}, 30)
+    assert np.allclose(plain, np.minimum(growth ** np.arange(30), 5.0))
+    cut = _steps(c, {3: 2}, 30)                          # step 3 taken at 1/16 of its size
+    assert cut[2] == pytest.approx(plain[2] / 16)
+    assert np.allclose(cut[3:6] / cut[2:5], 2.0)         # x2 while it grows back
+    assert np.allclose(cut[10:], plain[10:])             # back on the schedule
 
 
 @pytest.mark.parametrize("size,ranks", [(1e-6, 1), (1e-9, 1), (1e-6, 2)])

@@ -63,18 +63,24 @@ def _times(outdir):
     return [float(r["time"]) for r in csv.DictReader(open(os.path.join(outdir, "history.csv")))]
 
 
-@pytest.mark.parametrize("scene,options", [LAUWERIER, SCENE2], ids=["lauwerier", "scene2"])
-def test_kill_9_then_restart_gives_the_uninterrupted_run(tmp_path, scene, options):
+@pytest.mark.parametrize("scene,options,every", [
+    (*LAUWERIER, ("-thm_checkpoint_interval", 5)), (*SCENE2, ("-thm_checkpoint_interval", 5)),
+    (*LAUWERIER, ("-thm_checkpoint_interval", 0, "-thm_checkpoint_wall", 1e-9))],
+    ids=["lauwerier", "scene2", "lauwerier-wall"])
+def test_kill_9_then_restart_gives_the_uninterrupted_run(tmp_path, scene, options, every):
     """A fracture TH scene and a contact scene (Scene 2: u, lam, pf, Tf,
-    Tm), killed with SIGKILL after their first checkpoint (every 5 steps):
-    -thm_restart continues to the uninterrupted run's final state (1e-10)
-    and history (the rows after the checkpoint are written again, once)."""
+    Tm), killed with SIGKILL after their first checkpoint (every 5 steps,
+    or by wall time: -thm_checkpoint_wall): -thm_restart continues to the
+    uninterrupted run's final state (1e-10) and history (the rows after the
+    checkpoint are written again, once)."""
     _, ref = run_petthm(scene, tmp_path / "ref", *options)
     out = tmp_path / "killed"
-    proc = _start(scene, out, (*options, "-thm_checkpoint_interval", 5))
+    proc = _start(scene, out, (*options, *every))
     _wait_for(out / "checkpoint.h5")
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=60)
+    with h5py.File(out / "checkpoint.h5", "r") as h5:       # killed mid-run, not after the end
+        assert h5.attrs["time"] < float(options[-1])
     _, s = run_petthm(scene, out, "-thm_restart", out, *options)
     x_ref, meta_ref = _final_state(tmp_path / "ref")
     x, meta = _final_state(out)
