@@ -185,6 +185,10 @@ class RunParams:
     dt_initial: float = param(0.0, "s", "first time step (0: scene default)", lo=0.0)
     dt_growth: float = param(0.0, "-", "time-step growth factor per step (0: scene default)", lo=0.0)
     dt_max: float = param(0.0, "s", "largest time step (0: scene default)", lo=0.0)
+    dt_control: str = param("schedule", "-", "time steps from the scene's schedule (first step, growth, "
+                            "largest step), or from an estimate of backward Euler's local error "
+                            "(PETSc's TS adaptivity: -ts_adapt_*, tolerance -ts_atol on the scaled "
+                            "unknowns, default 1e-3 of each field's range)", choices=("schedule", "error"))
     output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0)
     quiet: bool = param(False, "-", "no per-step progress line")
     max_cells: int = param(5_000_000, "cells", "refuse a generated mesh that would have more cells "

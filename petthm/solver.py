@@ -108,6 +108,22 @@ def propose_defaults(defaults: dict[str, str]) -> None:
             PROPOSED.add(k)
 
 
+def error_control_defaults(control: "StepControl") -> dict[str, str]:
+    """The TS options of ``-thm_dt_control error`` (proposed: a user's
+    ``-ts_adapt_*``, ``-ts_atol``, ``-ts_rtol`` win).  PETSc's basic
+    adaptivity on backward Euler's local error estimate (TSTheta: the step's
+    distance to the quadratic through the last three states), measured on
+    the scaled unknowns (``Problem.scales``: each field's range is ~1), so
+    ``-ts_atol`` is a fraction of each field's range (1e-3: 0.08 K on an 80 K
+    cooling); the largest entry counts (a front is local); the scene's
+    largest step and the collapse floor bound the steps."""
+    out = {"ts_adapt_type": "basic", "ts_atol": "1e-3", "ts_rtol": "0",
+           "ts_adapt_wnormtype": "infinity", "ts_adapt_dt_min": repr(control.dt_floor())}
+    if math.isfinite(control.dt_max):
+        out["ts_adapt_dt_max"] = repr(control.dt_max)
+    return out
+
+
 @dataclass
 class StepControl:
     final_time: float
@@ -222,6 +238,8 @@ class TimeStepper:
         self.stopped: str | None = None
         self.failure: str | None = None          # why the run was stopped as failed (not a TS reason)
         self._start_schedule(control, ts.getTimeStep())
+        #: the TS chooses the steps (-ts_adapt_type other than none: -thm_dt_control error)
+        self.adaptive = PETSc.Options(ts.getOptionsPrefix()).getString("ts_adapt_type", "none") != "none"
         self._reported = None                    # (step, t) the user's monitor saw last
 
     def _start_schedule(self, control: StepControl, first_dt: float) -> None:
@@ -266,6 +284,9 @@ class TimeStepper:
                             f"(below {c.dt_floor():.3g} s, after rejected steps): the run cannot go on")
             self._stop_now()
             return
+        if self.adaptive:                      # the TS's error estimate chose the next step
+            self._land_on_hit_times(ts, t, ts.getTimeStep())
+            return
         taken = ts.getTimeStep()
         cut = ts.getStepRejections() > self._rejections_seen       # rejected tries cut this step
         self._rejections_seen = ts.getStepRejections()
@@ -280,11 +301,17 @@ class TimeStepper:
         if self._last_dt_cut is not None and not cut:    # resume the growth sequence after a hit
             dt = min(self._last_dt_cut, c.dt_max)
         self._last_dt_cut = None
-        remaining = c.final_time - t
+        self._land_on_hit_times(ts, t, dt)
+
+    def _land_on_hit_times(self, ts, t: float, dt: float) -> None:
+        """Propose the next step dt, cut to land on the next hit time (the step
+        it cut is kept for after it) and on the final time; then the monitor."""
+        c = self.control
         upcoming = [h - t for h in c.hit_times if h - t > 1e-9 * max(abs(t), 1.0)]
         if upcoming and min(upcoming) < dt * (1 + 1e-9):
             self._last_dt_cut = dt
             dt = min(upcoming)
+        remaining = c.final_time - t
         if remaining > 0:
             ts.setTimeStep(min(dt, remaining))
         self._proposed = dt
