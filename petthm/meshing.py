@@ -254,6 +254,46 @@ def layered_half_box_with_disc(path: str, half: float, radius: float, size: floa
     return _write(gmsh, 3, path)
 
 
+def layered_slab_with_fracture(path: str, extent: Sequence[float], width: float, fracture_size: float,
+                               layer: float, ratio: float) -> str:
+    """The slab [0, L] x [0, 2W] (2D, ``extent`` = (L,)) or [0, L] x [0, H] x
+    [0, 2W] (3D, ``extent`` = (L, H)) around the planar fracture y = W (2D) or
+    z = W (3D) that cuts the whole slab, meshed in layers: the fracture is
+    meshed at ``fracture_size`` and extruded to both sides in layers of
+    thickness ``layer`` growing by ``ratio`` (each quadrilateral or prism cut
+    into simplices).  The thin cells next to the fracture resolve the rock's
+    thermal boundary layer (sqrt(kappa t): 0.09 m at 1e4 s in granite), the
+    cells stay aligned with the conduction normal to the fracture, and the
+    count grows only with the number of layers.  Physical groups as in
+    ``box_with_fractures`` (the fracture reaches the outer boundary: no tip)."""
+    dim = len(extent) + 1
+    gmsh = _start("layered_slab")
+    occ = gmsh.model.occ
+    if dim == 2:
+        base = occ.addLine(occ.addPoint(0.0, width, 0.0), occ.addPoint(extent[0], width, 0.0))
+        shift = (0.0, 1.0, 0.0)
+    else:
+        base = occ.addRectangle(0.0, 0.0, width, extent[0], extent[1])
+        shift = (0.0, 0.0, 1.0)
+    h = layer_heights(layer, ratio, width)
+    cum = list(np.cumsum(h) / width)
+    flipped = []
+    for sign in (1.0, -1.0):
+        out = occ.extrude([(dim - 1, base)], *(sign * width * c for c in shift), numElements=[1] * len(h),
+                          heights=cum, recombine=False)
+        if sign < 0:
+            flipped += [t for (d, t) in out if d == dim]
+    occ.synchronize()
+    if dim == 2:             # a line extruded toward -y gives clockwise triangles: turn them over
+        for t in flipped:
+            gmsh.model.mesh.setReverse(2, t)
+    on_outer = _tag_domain(gmsh, dim, [t for (_, t) in gmsh.model.getEntities(dim)])
+    _tag_fracture(gmsh, dim, 0, [base], on_outer)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", fracture_size)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", fracture_size)
+    return _write(gmsh, dim, path)
+
+
 def _embed_curves(gmsh, dim: int, curves: list, cells: list) -> None:
     """Embed each curve in the cell (volume) that contains it: the OCC
     fragment embeds a curve inside a volume by itself only when no surface

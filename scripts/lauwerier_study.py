@@ -17,7 +17,9 @@ the spatial one; ``beuler_error`` takes the steps from backward Euler's local
 error estimate (``-thm_dt_control error``) with the level's ``-ts_atol``
 (``ERROR_TOLERANCE``) and largest step.  The table has the outlet error over
 t >= 1e4 s (the whole meaningful range; the plot's metric) and over
-t >= 1e6 s (the earlier metric)."""
+t >= 1e6 s (the earlier metric); ``beuler_layered`` runs the levels' fracture
+sizes and steps on the layered mesh (``-thm_lauwerier_layer``: the fracture's
+cells extruded to both sides in layers from 0.05 m growing by 1.5)."""
 from __future__ import annotations
 
 import argparse
@@ -36,7 +38,10 @@ LEVELS = {0: (4.0, 20.0, 1.10, 4e6), 1: (2.0, 15.0, 1.07, 2e6), 2: (1.0, 10.0, 1
 ERROR_TOLERANCE = {0: 1e-2, 1: 3e-3, 2: 1e-3, 3: 3e-4, 4: 1e-4}
 SCHEMES = {"beuler": ("-", "backward Euler, schedule"), "bdf2": ("--", "BDF2, schedule"),
            "beuler_fine_dt": (":", "BE, fixed small steps"),
-           "beuler_error": ("-.", "backward Euler, error control")}
+           "beuler_error": ("-.", "backward Euler, error control"),
+           "beuler_layered": ((0, (3, 1, 1, 1)), "backward Euler, layered mesh")}
+#: the ``beuler_layered`` scheme's first layer (m: ~0.5 sqrt(kappa 1e4 s)) and layer growth
+LAYER, LAYER_GROWTH = 0.05, 1.5
 
 
 def _metric(x):
@@ -51,10 +56,13 @@ def run_one(out, degree, level, scheme="beuler"):
     if scheme == "beuler_fine_dt":       # the same small steps at every level: spatial error only
         dt = ("-thm_dt_growth", 1.01, "-thm_dt_max", 1e5)
     bdf2 = ("-ts_type", "bdf", "-ts_bdf_order", 2) if scheme == "bdf2" else ()
+    mesh = ()
+    if scheme == "beuler_layered":       # the level's steps and fracture size on a layered mesh
+        mesh = ("-thm_lauwerier_layer", LAYER, "-thm_lauwerier_layer_growth", LAYER_GROWTH)
     if scheme == "beuler_error":         # steps from the local error estimate, tolerance by level
         dt = ("-thm_dt_control", "error", "-ts_atol", ERROR_TOLERANCE[level], "-thm_dt_max", dtmax)
     s = run_petthm("lauwerier", d, "-thm_fe_degree", degree, "-thm_lauwerier_fracture_size", fs,
-                   "-thm_mesh_size", ms, *dt, *bdf2)
+                   "-thm_mesh_size", ms, *dt, *bdf2, *mesh)
     e = s["error"]
     row = {"scheme": scheme, "degree": degree, "level": level, "fracture_size": fs, "mesh_size": ms,
            "dt_growth": g if scheme != "beuler_error" else f"atol {ERROR_TOLERANCE[level]:g}",
@@ -82,7 +90,8 @@ def plot(rows, out):
                    key=lambda x: float(x["wall_s"]))
         if not r:
             continue
-        ax.loglog([float(x["wall_s"]) for x in r], [_metric(x) for x in r], mk + ls, label=f"P{deg} {label}")
+        ax.loglog([float(x["wall_s"]) for x in r], [_metric(x) for x in r], marker=mk, linestyle=ls,
+                  label=f"P{deg} {label}")
         for x in r:
             ax.annotate(f"L{x['level']}", (float(x["wall_s"]), _metric(x)), fontsize=7)
     ax.axhline(0.1, color="gray", ls=":", label="0.1 K")

@@ -15,6 +15,7 @@ from ..analytic import lauwerier_temperature
 from ..assembly import FieldScale
 from ..builders import ModelBuilder
 from ..constraints import Dirichlet
+from ..errors import InputError
 from ..kernels import wells as wl
 from ..monitors import FractureWells, hit
 from ..params import CELSIUS, param
@@ -29,8 +30,15 @@ class LauwerierParams:
     """Fracture in impermeable hot rock (lauwerier; verification.md section 1)"""
     lauwerier_length: float = param(100.0, "m", "fracture length L (injector at x = 0, producer at x = L)",
                                     lo=0.0, lo_open=True)
-    lauwerier_width: float = param(60.0, "m", "rock on each side of the fracture", lo=0.0, lo_open=True)
+    lauwerier_width: float = param(0.0, "m", "rock on each side of the fracture (0: the larger of 60 m "
+                                   "and 4 sqrt(kappa t_final); a width below 4 sqrt(kappa t_final), where "
+                                   "the rock's far side would feel the cooling, is refused)", lo=0.0)
     lauwerier_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+    lauwerier_layer: float = param(0.0, "m", "first rock layer on each side of the fracture of a layered "
+                                   "mesh (fracture cells extruded in layers growing by "
+                                   "-thm_lauwerier_layer_growth; ~0.5 sqrt(kappa t) resolves the thermal "
+                                   "layer from time t on); 0: a graded unstructured mesh", lo=0.0)
+    lauwerier_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
     lauwerier_dim: int = param(2, "-", "2: plane strain (H = 1 m); 3: a slab of height H with line wells",
                                choices=(2, 3))
     lauwerier_height: float = param(1.0, "m", "slab height H (3D; Q is the slab's total rate)",
@@ -173,13 +181,34 @@ class Lauwerier(Scene):
                        "Tf_min", "Tf_max", "mass_balance", "energy_balance")
     profile_times = (1e7, 1e8)
 
+    def __init__(self, run, p):
+        super().__init__(run, p)
+        self.width = self.checked_width()
+
+    def checked_width(self) -> float:
+        """The rock width each side: wide enough that the far side stays at T0
+        until the end (4 sqrt(kappa t): erfc(2) = 0.5 % of the cooling there)."""
+        p = self.p
+        need = 4.0 * np.sqrt(p.conductivity / p.rho_c * self.final_time)
+        if not p.lauwerier_width:
+            return max(60.0, float(np.ceil(need)))
+        if p.lauwerier_width < need:
+            raise InputError(f"option -thm_lauwerier_width = {p.lauwerier_width:g} m: the cooling reaches "
+                             f"the far side of the rock by the end time {self.final_time:g} s; it must be >= "
+                             f"4 sqrt(kappa t) = {need:.3g} m (or 0 for a width that fits)")
+        return p.lauwerier_width
+
     def boundaries(self):
         p = self.p
-        return {"far": far_sides(p.lauwerier_width, p.lauwerier_dim - 1)}   # normal axis: y (2D), z (3D)
+        return {"far": far_sides(self.width, p.lauwerier_dim - 1)}   # normal axis: y (2D), z (3D)
 
     def generate_mesh(self, path, size):
         p = self.p
-        L, W, H = p.lauwerier_length, p.lauwerier_width, p.lauwerier_height
+        L, W, H = p.lauwerier_length, self.width, p.lauwerier_height
+        if p.lauwerier_layer:
+            return meshing.layered_slab_with_fracture(path, (L,) if p.lauwerier_dim == 2 else (L, H), W,
+                                                      p.lauwerier_fracture_size, p.lauwerier_layer,
+                                                      p.lauwerier_layer_growth)
         if p.lauwerier_dim == 2:
             return strip_with_fracture(path, L, W, size, p.lauwerier_fracture_size)
         fr = [meshing.Fracture("rectangle", center=(0.5 * L, 0.5 * H, W), half=(0.5 * L, 0.5 * H),
@@ -188,7 +217,7 @@ class Lauwerier(Scene):
 
     def wells_at(self):
         p = self.p
-        return (0.0, p.lauwerier_width), (p.lauwerier_length, p.lauwerier_width)
+        return (0.0, self.width), (p.lauwerier_length, self.width)
 
     def exact(self, x, t):
         """Lauwerier's T_f(x, t) in kelvin (with the transit delay t_d = a x / q)."""

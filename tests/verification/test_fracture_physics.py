@@ -15,7 +15,8 @@ def _problem(tmp_path, scene, **opts):
     return build_problem(tmp_path, scene, **opts)
 
 
-COARSE_LAUWERIER = dict(thm_mesh_size=40, thm_lauwerier_fracture_size=10, thm_lauwerier_width=20)
+COARSE_LAUWERIER = dict(thm_mesh_size=40, thm_lauwerier_fracture_size=10, thm_lauwerier_width=20,
+                        thm_final_time=1e6)
 COARSE_SCENE1 = dict(thm_mesh_size=60, thm_scene1_fracture_size=10, thm_scene1_margin=40)
 
 
@@ -85,6 +86,7 @@ def test_lauwerier_outlet_and_profile(tmp_path):
     e, b = s["error"], s["balance_max"]
     print(s["dofs"], s["steps"], e, b, s["wall_time"]["total"])
     assert e["outlet_max_rel_t_ge_1e6"] <= 1e-2
+    assert e["outlet_max_rel_t_ge_1e4"] >= e["outlet_max_rel_t_ge_1e6"]         # a longer range
     assert e["profile_max_rel_t1e+07"] <= 1e-2 and e["profile_max_rel_t1e+08"] <= 1e-2
     assert b["Tf_bounds_violation"] <= 1e-2
     assert b["mass_balance"] <= 1e-6 and b["energy_balance"] <= 1e-6
@@ -94,6 +96,31 @@ def test_lauwerier_outlet_and_profile(tmp_path):
         _, pd, _ = r.read_data(r.num_steps - 1)
     assert cells[0].type == "line3" and len(pts) == s["dofs"]["Tf"]
     assert 20.0 - 0.8 <= pd["Tf"].min() and pd["Tf"].max() <= 100.0 + 0.8
+
+
+def test_error_controlled_steps_follow_the_tolerance(tmp_path):
+    """Issue 16: -thm_dt_control error lets PETSc's TS adaptivity choose the
+    steps from backward Euler's local error estimate: a 10x tighter -ts_atol
+    takes more steps (the schedule's geometric steps would not change),
+    the steps stay within -thm_dt_max, the scene's hit times (1e6, 1e7 s)
+    are landed on exactly, and the outlet error over t >= 1e4 s falls."""
+    import csv
+    runs = {}
+    for atol in (1e-2, 1e-3):
+        _, s = run_petthm("lauwerier", tmp_path / f"atol{atol:g}", "-thm_dt_control", "error",
+                          "-ts_atol", atol, "-thm_dt_max", 2e6, "-thm_final_time", 2e7, "-thm_fe_degree", 1)
+        rows = list(csv.DictReader(open(tmp_path / f"atol{atol:g}" / "history.csv")))
+        runs[atol] = (s, [float(r["time"]) for r in rows], [float(r["dt"]) for r in rows[1:]])
+        print(atol, s["steps"], s["rejected_steps"], s["error"])
+    (s2, t2, dt2), (s3, t3, dt3) = runs[1e-2], runs[1e-3]
+    assert s2["status"] == s3["status"] == "completed"
+    assert s3["steps"] > 1.5 * s2["steps"]
+    for times, dts in ((t2, dt2), (t3, dt3)):
+        assert max(dts) <= 2e6 * (1 + 1e-12)
+        assert 1e6 in times and 1e7 in times and times[-1] == 2e7
+        ratios = [b / a for a, b in zip(dts, dts[1:])]
+        assert max(ratios) > 1.3 or min(ratios) < 0.9        # not one geometric factor
+    assert s3["error"]["outlet_max_rel_t_ge_1e4"] < s2["error"]["outlet_max_rel_t_ge_1e4"]
 
 
 @pytest.mark.slow
