@@ -97,6 +97,16 @@ def test_bad_petsc_option_values_are_one_line_errors(tmp_path, opts, words):
     assert all(w in msg for w in words), msg
 
 
+def test_a_rock_too_narrow_for_the_end_time_is_refused(tmp_path):
+    """Issue 16: lauwerier's rock must be wider than 4 sqrt(kappa t_final)
+    (the 60 m default was too narrow past ~2e8 s); 0, the default, takes a
+    width that fits."""
+    proc, _ = run_petthm("lauwerier", tmp_path, "-thm_lauwerier_width", 60, "-thm_final_time", 1e9,
+                         check=False)
+    msg = _one_line_error(proc)
+    assert "-thm_lauwerier_width = 60" in msg and "118 m" in msg, msg
+
+
 def test_a_bad_option_of_the_block_recipe_is_a_one_line_error(tmp_path):
     """Issue 15: an option value the block recipe's inner solvers refuse
     surfaces at the first preconditioner set-up; it used to end in a

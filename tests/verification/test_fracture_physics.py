@@ -98,17 +98,36 @@ def test_lauwerier_outlet_and_profile(tmp_path):
     assert 20.0 - 0.8 <= pd["Tf"].min() and pd["Tf"].max() <= 100.0 + 0.8
 
 
+def test_layered_mesh_resolves_the_wall_layer(tmp_path):
+    """Issue 16: on the layered mesh (-thm_lauwerier_layer: the fracture's
+    cells extruded in layers from 0.05 m) the outlet error from 1e4 s on
+    is within verification.md's 1 %, and several times smaller than on the
+    graded unstructured mesh of the same fracture size (measured 0.71 K
+    against 8.8 K at 4 m): the early error is the rock's thermal layer at
+    the wall, which the layers resolve."""
+    common = ("-thm_lauwerier_fracture_size", 4, "-thm_mesh_size", 20, "-thm_dt_growth", 1.05,
+              "-thm_dt_max", 1e6)
+    _, layered = run_petthm("lauwerier", tmp_path / "layered", *common, "-thm_lauwerier_layer", 0.05)
+    _, graded = run_petthm("lauwerier", tmp_path / "graded", *common)
+    e, g = layered["error"], graded["error"]
+    print("layered", layered["cells"], e, "graded", graded["cells"], g)
+    assert e["outlet_max_rel_t_ge_1e4"] <= 1e-2 and e["profile_max_rel_t1e+07"] <= 1e-2
+    assert g["outlet_max_rel_t_ge_1e4"] >= 4 * e["outlet_max_rel_t_ge_1e4"]
+    assert layered["balance_max"]["energy_balance"] <= 1e-6
+
+
 def test_error_controlled_steps_follow_the_tolerance(tmp_path):
     """Issue 16: -thm_dt_control error lets PETSc's TS adaptivity choose the
     steps from backward Euler's local error estimate: a 10x tighter -ts_atol
     takes more steps (the schedule's geometric steps would not change),
     the steps stay within -thm_dt_max, the scene's hit times (1e6, 1e7 s)
-    are landed on exactly, and the outlet error over t >= 1e4 s falls."""
+    are landed on exactly, and the errors the time steps decide fall."""
     import csv
     runs = {}
     for atol in (1e-2, 1e-3):
         _, s = run_petthm("lauwerier", tmp_path / f"atol{atol:g}", "-thm_dt_control", "error",
-                          "-ts_atol", atol, "-thm_dt_max", 2e6, "-thm_final_time", 2e7, "-thm_fe_degree", 1)
+                          "-ts_atol", atol, "-thm_dt_max", 2e6, "-thm_final_time", 2e7, "-thm_fe_degree", 1,
+                          "-thm_mesh_size", 20, "-thm_lauwerier_fracture_size", 2)
         rows = list(csv.DictReader(open(tmp_path / f"atol{atol:g}" / "history.csv")))
         runs[atol] = (s, [float(r["time"]) for r in rows], [float(r["dt"]) for r in rows[1:]])
         print(atol, s["steps"], s["rejected_steps"], s["error"])
@@ -120,7 +139,10 @@ def test_error_controlled_steps_follow_the_tolerance(tmp_path):
         assert 1e6 in times and 1e7 in times and times[-1] == 2e7
         ratios = [b / a for a, b in zip(dts, dts[1:])]
         assert max(ratios) > 1.3 or min(ratios) < 0.9        # not one geometric factor
-    assert s3["error"]["outlet_max_rel_t_ge_1e4"] < s2["error"]["outlet_max_rel_t_ge_1e4"]
+    # the time error falls (measured: outlet over t >= 1e6 s 5.3e-2 -> 3.0e-2, profile at 1e7 s
+    # 9.4e-3 -> 5.3e-3; 81 -> 228 steps); the outlet error from 1e4 s on is the mesh's
+    for key in ("outlet_max_rel_t_ge_1e6", "profile_max_rel_t1e+07"):
+        assert s3["error"][key] < 0.7 * s2["error"][key]
 
 
 @pytest.mark.slow
