@@ -134,6 +134,7 @@ class _HeatPoint:
         a = 1.0 if self.ap is None else self.ap.a
         self.C, self.L = h.capacity * a, h.conductivity * a         # numbers or (nc, nq)
         self.advect = h.advects
+        self.mass = None                 # the flow's mass rate (SUPG's T div b), where R carries it
         d = ctx.dim
         if self.advect:
             if h.flow is not None:
@@ -167,7 +168,7 @@ class _HeatPoint:
     @property
     def conservative(self) -> bool:
         """R carries T div b from the flow's mass balance."""
-        return hasattr(self, "mass")
+        return self.mass is not None
 
     def dZ_db(self):
         """dZ_a/db_c of Z = tau R b: (nc, nq, a, c)."""
