@@ -242,7 +242,7 @@ def write_ogs_prj(d: Path, steps: list[float], stabilization: str, solver: str =
     <processes><process ref="HT">
       <nonlinear_solver>picard</nonlinear_solver>
       <convergence_criterion><type>PerComponentDeltaX</type><norm_type>INFINITY_N</norm_type>
-        <abstols>1e-6 1e-3</abstols></convergence_criterion>
+        <abstols>1e-6 1</abstols></convergence_criterion>
       <time_discretization><type>BackwardEuler</type></time_discretization>
       <time_stepping><type>FixedTimeStepping</type><t_initial>0</t_initial><t_end>{sum(steps)!r}</t_end>
         <timesteps>{pairs}</timesteps></time_stepping>
