@@ -397,7 +397,8 @@ def main() -> int:
     lines = ["# Verification and stability report", "",
              f"Written by `python scripts/verification_report.py` on {time.strftime('%Y-%m-%d')} from commit "
              f"{_commit()} in {time.time() - t0:.0f} s ({a.jobs} case(s) at a time on this machine; wall "
-             "times are single runs).  Convergence: levels 0, 1, 2 halve every mesh size of the case; "
+             f"times are single runs{'; runs found in the output folder were reused' if REUSE else ''}).  "
+             "Convergence: levels 0, 1, 2 halve every mesh size of the case; "
              "the fitted rate is the slope of log(error) against log(h); expected: the element order for "
              "manufactured solutions (met: within 0.2), round-off for exact cases, '-' for benchmarks "
              "whose error has other limits (time steps, a finite box, what the analytical solution leaves "
