@@ -34,6 +34,8 @@ CASES = {
                 ["-thm_fracture_heat_exchange", "nusselt"]),
     "dt": ("steps x1.1 up to 5e6 s", ["-thm_dt_growth", "1.1", "-thm_dt_max", "5e6"]),
     "tip0": ("lam = 0 at the front", ["-thm_scene2_tip_traction", "zero"]),
+    "err": ("steps from the local error estimate (-thm_dt_control error, -ts_atol 1e-2)",
+            ["-thm_dt_control", "error", "-ts_atol", "1e-2"]),
 }
 PAPER = {"lam_injector": 30e6, "aperture_injector": 0.3e-3}
 #: the coarse case of ``make demo`` (--demo): the paper's Scene 2 to 1e9 s in about a minute
