@@ -173,8 +173,10 @@ def write_ogs_mesh(d: Path, dx: float, h0: float, growth: float, W: float) -> di
     ny = len(y) - 1
     X, Y = np.meshgrid(x, y)
     pts = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    nid = lambda j, i: j * (nx + 1) + i
-    quads = [[nid(j, i), nid(j, i + 1), nid(j + 1, i + 1), nid(j + 1, i)] for j in range(ny) for i in range(nx)]
+    def nid(j, i):
+        return j * (nx + 1) + i
+    quads = [[nid(j, i), nid(j, i + 1), nid(j + 1, i + 1), nid(j + 1, i)]
+             for j in range(ny) for i in range(nx)]
     lines = [[nid(jf, i), nid(jf, i + 1)] for i in range(nx)]
     cells = quads + lines
     types = [9] * len(quads) + [3] * len(lines)
@@ -327,7 +329,8 @@ def run_ogs(level: int, out: Path, venv: Path, t_end: float, root: Path, stabili
     ts = np.array([times[k] for k, _, _ in rows])
     T = np.array([v for _, v, _ in rows])
     _write_history(d / "outlet_history.csv", ts, T, root)
-    return {"code": "OGS 6.5.9" + ("" if solver == "SparseLU" else f" {solver}"), "case": f"R{level}", "mesh": f"quads+1D lines, dx {dx:g} m, wall layer {h0:g} m "
+    return {"code": "OGS 6.5.9" + ("" if solver == "SparseLU" else f" {solver}"), "case": f"R{level}",
+            "mesh": f"quads+1D lines, dx {dx:g} m, wall layer {h0:g} m "
             f"x{growth:g} ({info['layers_per_side']} layers/side)", "cells": info["cells"],
             "dofs": info["dofs"], "steps": len(steps), "wall_s": wall, "error_K": score(ts, T, root),
             "load_before": load, "schedule": sched, "p_inlet_end_Pa": inlet[-1][2],
@@ -377,8 +380,8 @@ def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
     t = np.array([float(r["time"]) for r in rows])
     T = np.array([float(r["production_temperature"]) for r in rows])
     _write_history(d / "outlet_history.csv", t, T, root)
-    mesh = f"P2 {'layered ' + str(PETTHM_LAYER) + ' m x' + str(PETTHM_LAYER_GROWTH) if layered else 'graded'}" \
-           f", fracture h {fs:g} m, far {ms:g} m"
+    kind = f"layered {PETTHM_LAYER} m x{PETTHM_LAYER_GROWTH}" if layered else "graded"
+    mesh = f"P2 {kind}, fracture h {fs:g} m, far {ms:g} m"
     return {"code": "petthm P2", "case": f"L{level}" + ("-layered" if layered else ""), "mesh": mesh,
             "cells": s["cells"], "dofs": sum(s["dofs"].values()), "steps": s["steps"], "wall_s": wall,
             "error_K": score(t, T, root), "load_before": load, "schedule": sched,
@@ -399,22 +402,25 @@ def write_results(rows, out: Path, t_end: float, stabilization: str, solver: str
         for r in rows:
             w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()})
     best = _best(rows)
-    lines = [f"# petthm vs OpenGeoSys 6.5.9: Lauwerier outlet error against wall time",
+    lines = ["# petthm vs OpenGeoSys 6.5.9: Lauwerier outlet error against wall time",
              "", f"End time {t_end:g} s; error = max |T_out - T_Lauwerier| over {T_SCORE:g} s <= t <= "
-             f"{t_end:g} s (K); wall = whole process, one run at a time (best of {max(r['repeat'] for r in rows)}"
-             f" run(s)); OGS stabilization: {stabilization}; OGS linear solver(s): Eigen {solver}.", "",
-             "| code | case | mesh | cells | dofs | steps (schedule) | wall (s) | error (K) | load avg before |",
+             f"{t_end:g} s (K); wall = whole process, one run at a time (best of "
+             f"{max(r['repeat'] for r in rows)} run(s)); OGS stabilization: {stabilization}; "
+             f"OGS linear solver(s): Eigen {solver}.", "",
+             "| code | case | mesh | cells | dofs | steps (schedule) | wall (s) | error (K) | "
+             "load avg before |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in best:
         g, dtmax = SCHEDULES[r["schedule"]]
         lines.append(f"| {r['code']} | {r['case']} | {r['mesh']} | {r['cells']} | {r['dofs']} | {r['steps']} "
                      f"(x{g:g}, max {dtmax:.0e} s) | {r['wall_s']:.2f} | {r['error_K']:.3f} | "
                      f"{r['load_before']:.2f} |")
-    lines += ["", "petthm at each OGS run's error: the fastest measured petthm run with the same or a smaller "
-              "error (any mesh), and the graded series' wall time at that error interpolated log-log between "
-              "its runs ('-': no petthm run reaches it / outside the series' range).", "",
-              "| OGS case | OGS error (K) | OGS wall (s) | fastest petthm run with error <= it | its wall (s) | "
-              "speed-up | graded P2 interpolated (s) | speed-up |", "|---|---|---|---|---|---|---|---|"]
+    lines += ["", "petthm at each OGS run's error: the fastest measured petthm run with the same or a "
+              "smaller error (any mesh), and the graded series' wall time at that error interpolated "
+              "log-log between its runs ('-': no petthm run reaches it / outside the series' range).", "",
+              "| OGS case | OGS error (K) | OGS wall (s) | fastest petthm run with error <= it | "
+              "its wall (s) | speed-up | graded P2 interpolated (s) | speed-up |",
+              "|---|---|---|---|---|---|---|---|"]
     pets = [r for r in best if r["code"].startswith("petthm")]
     graded = sorted((r for r in pets if "layered" not in r["case"]), key=lambda r: r["error_K"])
     for r in sorted((x for x in best if x["code"].startswith("OGS")), key=lambda x: (x["code"], x["case"])):
@@ -423,8 +429,8 @@ def write_results(rows, out: Path, t_end: float, stabilization: str, solver: str
         tw = _interp_wall(graded, r["error_K"])
         lines.append(f"| {r['code'].replace('OGS 6.5.9', '').strip() or 'SparseLU'} {r['case']} | "
                      f"{r['error_K']:.3f} | {r['wall_s']:.2f} | "
-                     + (f"{f['case']} ({f['error_K']:.3f} K) | {f['wall_s']:.2f} | {r['wall_s'] / f['wall_s']:.2f}x | "
-                        if f else "- | - | - | ")
+                     + (f"{f['case']} ({f['error_K']:.3f} K) | {f['wall_s']:.2f} | "
+                        f"{r['wall_s'] / f['wall_s']:.2f}x | " if f else "- | - | - | ")
                      + (f"{tw:.2f} | {r['wall_s'] / tw:.2f}x |" if tw else "- | - |"))
     (out / "peer_ogs.md").write_text("\n".join(lines) + "\n")
     plot(best, out / "peer_ogs.png", t_end)
@@ -460,7 +466,8 @@ def plot(rows, path: Path, t_end: float):
     for r in rows:
         key = r["code"] + (" layered" if "layered" in r["case"] else "")
         series.setdefault(key, []).append(r)
-    style = {"OGS 6.5.9": ("o", "-"), "OGS 6.5.9 BiCGSTAB": ("D", ":"), "petthm P2": ("s", "-"), "petthm P2 layered": ("^", "--")}
+    style = {"OGS 6.5.9": ("o", "-"), "OGS 6.5.9 BiCGSTAB": ("D", ":"), "petthm P2": ("s", "-"),
+             "petthm P2 layered": ("^", "--")}
     for key, rs in series.items():
         rs = sorted(rs, key=lambda r: r["wall_s"])
         mk, ls = style.get(key, ("x", ":"))
@@ -488,12 +495,14 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=1, help="run everything this many times (best wall kept)")
     ap.add_argument("--final-time", type=float, default=1e9)
     ap.add_argument("--stabilization", default="none", choices=("none", "FullUpwind"),
-                    help="OGS's numerical stabilization of the heat advection (FullUpwind diverges on this "
-                    "mixed-dimensional mesh in 6.5.9: docs/peer_ogs.md)")
+                    help="OGS's numerical stabilization of the heat advection (FullUpwind gives outlet "
+                    "temperatures far above 100 degC on this mixed-dimensional mesh in 6.5.9: "
+                    "docs/peer_ogs.md)")
     ap.add_argument("--ogs-solvers", default="SparseLU",
                     help="OGS's linear solvers, comma-separated, each run at every OGS level: "
                     + ", ".join(LINEAR_SOLVERS) + " (Eigen SparseLU; BiCGSTAB with ILUT)")
-    ap.add_argument("--petthm-root", default=str(ROOT), help="repository whose petthm is run (cwd of its runs)")
+    ap.add_argument("--petthm-root", default=str(ROOT),
+                    help="repository whose petthm is run (cwd of its runs)")
     ap.add_argument("--venv", default=os.path.expanduser("~/.cache/petthm/venv-ogs"))
     a = ap.parse_args(argv)
     out, root, venv = Path(a.out), Path(a.petthm_root).resolve(), Path(a.venv)
