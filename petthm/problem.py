@@ -205,8 +205,7 @@ class Problem:
             rows = np.concatenate([r for r, _ in patterns])
             cols = np.concatenate([c for _, c in patterns])
             del patterns
-            self.J = self.dm.createMat()
-            compat.coo_preallocate(self.J, rows, cols)
+            self.J = compat.coo_matrix(self.dm, rows, cols)
         return self.J
 
     def preconditioner_blocks(self) -> PETSc.Mat | None:
@@ -220,10 +219,9 @@ class Problem:
             regions = sorted({j.region for j in self.model.preconditioner})
             self._pc_assemblers = [Assembler(self.disc, terms, self.scales, region=r,
                                              inv_rscale=self.inv_rscale) for r in regions]
-            self._pc_blocks = self.dm.createMat()
             patterns = [a.coo_pattern() for a in self._pc_assemblers]
-            compat.coo_preallocate(self._pc_blocks, np.concatenate([r for r, _ in patterns]),
-                                   np.concatenate([c for _, c in patterns]))
+            self._pc_blocks = compat.coo_matrix(self.dm, np.concatenate([r for r, _ in patterns]),
+                                                np.concatenate([c for _, c in patterns]))
         xl, xdl, t, shift = self._jacobian_point
         compat.coo_set_values(self._pc_blocks, np.concatenate(
             [a.jacobian_values(xl, xdl, t, shift) for a in self._pc_assemblers]))
