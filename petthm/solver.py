@@ -237,14 +237,16 @@ class TimeStepper:
         self.error = None
         self.stopped: str | None = None
         self.failure: str | None = None          # why the run was stopped as failed (not a TS reason)
-        self._start_schedule(control, ts.getTimeStep())
-        #: the TS chooses the steps (-ts_adapt_type other than none: -thm_dt_control error)
-        self.adaptive = PETSc.Options(ts.getOptionsPrefix()).getString("ts_adapt_type", "none") != "none"
+        adaptive = PETSc.Options(ts.getOptionsPrefix()).getString("ts_adapt_type", "none") != "none"
+        self._start_schedule(control, ts.getTimeStep(), adaptive)
         self._reported = None                    # (step, t) the user's monitor saw last
 
-    def _start_schedule(self, control: StepControl, first_dt: float) -> None:
-        """The step schedule's memory (``_post_step``), before the first step."""
+    def _start_schedule(self, control: StepControl, first_dt: float, adaptive: bool = False) -> None:
+        """The step schedule's memory (``_post_step``), before the first step;
+        ``adaptive``: the TS chooses the steps (-ts_adapt_type other than none:
+        -thm_dt_control error), the schedule only lands them on the hit times."""
         self.control = control
+        self.adaptive = adaptive
         self._last_dt_cut = None                 # the step a hit time cut short, to go on with
         self._proposed = first_dt                # the step proposed for the step being taken
         self._recover_to = None                  # the schedule's step, while a cut step grows back
