@@ -4,20 +4,9 @@ import pytest
 
 from petthm.output import read_output
 
-from conftest import ROOT, run_petthm
+from conftest import ROOT, run_petthm, solver_without_parallel_direct
 
 TIGHT = ("-ksp_rtol", "1e-13", "-ksp_atol", "1e-15", "-snes_rtol", "1e-10", "-snes_atol", "1e-10")
-
-
-def solver_without_parallel_direct() -> tuple:
-    """Without MUMPS or SuperLU_dist (PyPI's PETSc) the parallel direct solve
-    is PETSc's LU on a gathered copy (11 min for Scene 2 on 2 ranks): serial
-    and parallel runs then both use the contact field split (8 s), which
-    compares the same parallel paths (VI, the split, the assembly)."""
-    from petsc4py import PETSc
-    if any(PETSc.Sys.hasExternalPackage(p) for p in ("mumps", "superlu_dist")):
-        return ()
-    return ("-options_file", f"{ROOT}/options/solvers/block.opts")
 
 
 def final_field(outdir, name="Tm", stem="fields"):
