@@ -328,14 +328,16 @@ class TimeStepper:
         cross the C callback).  In parallel a failure on some ranks only
         would leave the others waiting in the next step's collectives (and
         they may be inside the monitor's own), so the failing rank prints
-        its traceback and aborts the whole run."""
+        its traceback and aborts the whole run; an ``InputError`` (an unused
+        option, found after the first step) is raised on every rank alike and
+        ends the run as one."""
         if self._user_monitor is None or self.error is not None or self._reported == (step, t):
             return
         self._reported = (step, t)
         try:
             self._user_monitor(step, t, X)
         except Exception as e:  # noqa: BLE001 - re-raised after TSSolve returns
-            if ts.comm.size > 1:
+            if ts.comm.size > 1 and not isinstance(e, InputError):
                 _abort_all(ts.comm,
                            f"rank {ts.comm.rank}: the step monitor failed at step {step}, t = {t:.6g} s")
             self.error = e
@@ -394,6 +396,9 @@ class TimeStepper:
         which is cleaned up here too."""
         import gc
         comm = self.ts.comm
+        if self.error is not None:         # its frames hold the callbacks' wrappers of the TS, which
+            self.error.__traceback__ = None  # would outlive Python into PETSc's finalisation (a crash)
+            gc.collect()
         self.ts.destroy()
         self.snes = None
         self.context.destroy()

@@ -97,6 +97,20 @@ def test_bad_petsc_option_values_are_one_line_errors(tmp_path, opts, words):
     assert all(w in msg for w in words), msg
 
 
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_a_misspelt_option_with_the_block_recipe_is_a_one_line_error(tmp_path, ranks):
+    """Issue 15: a misspelt option is found after the first step; with the
+    block recipe's Python preconditioners the run then crashed at exit
+    (segmentation fault, exit 139: the error's traceback kept the TS alive
+    into PETSc's finalisation) and on 2 ranks aborted with a traceback on
+    every rank; now exit 2 and one line."""
+    proc, _ = run_petthm("contact_patch", tmp_path, "-options_file", f"{ROOT}/options/solvers/block.opts",
+                         "-ksp_foo", 1, ranks=ranks, check=False)
+    mine = [line for line in proc.stderr.splitlines() if line.startswith("petthm")]
+    assert proc.returncode == 2 and len(mine) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert "-ksp_foo" in mine[0]
+
+
 def test_a_rock_too_narrow_for_the_end_time_is_refused(tmp_path):
     """Issue 16: lauwerier's rock must be wider than 4 sqrt(kappa t_final)
     (the 60 m default was too narrow past ~2e8 s); 0, the default, takes a
