@@ -17,7 +17,8 @@ from petthm.output import read_output
 
 from conftest import MPI_ENV, ROOT, run_petthm, solver_without_parallel_direct
 
-LAUWERIER = ("lauwerier", ("-thm_final_time", 1e6))
+#: a coarse lauwerier (128 steps in ~2 s): what is tested is the restart, not the resolution
+LAUWERIER = ("lauwerier", ("-thm_mesh_size", 20, "-thm_lauwerier_fracture_size", 5, "-thm_final_time", 1e6))
 SCENE2 = ("penny_impermeable", ("-options_file", f"{ROOT}/options/scenes/penny_impermeable.opts",
                                 "-thm_scene2_fracture_size", 40, "-thm_scene2_well_size", 20,
                                 "-thm_scene2_layer", 0, "-thm_final_time", 1e7))
