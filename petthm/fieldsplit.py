@@ -247,7 +247,7 @@ class VIFieldSplit:
     ``-vi_pc_fieldsplit_type schur -vi_pc_fieldsplit_schur_precondition
     user``): S_s = A_ss - A_s,lam G A_u,s when the first split holds u and
     lam (what its fields see of the contact when the glue carries their
-    face loads; ``-vi_contact_schur 0`` leaves it out), plus the model's
+    face loads; ``-vi_contact_schur faces|all|off``, ``contact_schur``), plus the model's
     preconditioner blocks (the fixed-stress term of Biot;
     ``-vi_fixed_stress 0`` leaves it out)."""
 
@@ -281,10 +281,12 @@ class VIFieldSplit:
             ksp.getPC().setAttr(SPLIT, (weakref.ref(context), split.rows, own_maps))
         opts = PETSc.Options(self.inner.getOptionsPrefix())
         extra = context.problem.preconditioner_blocks() if opts.getBool("fixed_stress", True) else None
-        glue = maps if opts.getBool("contact_schur", True) else None
+        glue = maps if contact_schur(opts) != "off" else None
+        faces = context.problem.face_load_blocks() if glue is not None and contact_schur(opts) == "faces" \
+            else None
         mech = context.holds("u", splits[0].rows)
         for split in splits[1:]:                                # their preconditioning blocks
-            Sp = split_block(P, split, rows, context, glue, extra) if mech else None
+            Sp = split_block(P, split, rows, context, glue, extra, faces) if mech else None
             if Sp is not None:
                 split.iset.compose("pmat", Sp)
                 self._owned.append(Sp)
@@ -344,8 +346,27 @@ class VIFieldSplit:
         self.inner.apply(x, y)
 
 
+CONTACT_SCHUR = {"faces": "faces", "1": "all", "true": "all", "all": "all", "off": "off", "0": "off",
+                 "false": "off"}
+
+
+def contact_schur(opts: PETSc.Options) -> str:
+    """``-vi_contact_schur``: the load the contact-Schur term of ``split_block``
+    takes: ``all`` (default: every term of the u rows, the rock's body
+    loads of the wall nodes tied into the split too), ``faces`` (the
+    fracture terms of the u rows alone), ``off`` (no term).  Measured
+    (docs/solvers.md, stop 23): Scene 2 needs ``all`` (the thermal strain
+    of the tied wall nodes: ``faces`` rejects 11 steps, as ``off`` does),
+    the coupled MMS with the fracture closed needs ``faces`` (``all``
+    rejects 3 of 7 steps)."""
+    text = opts.getString("contact_schur", "all").lower()
+    if text not in CONTACT_SCHUR:
+        raise InputError(f"option -{opts.prefix}contact_schur = {text}: accepted faces, all, off")
+    return CONTACT_SCHUR[text]
+
+
 def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None,
-                extra: PETSc.Mat | None = None) -> PETSc.Mat | None:
+                extra: PETSc.Mat | None = None, faces: PETSc.Mat | None = None) -> PETSc.Mat | None:
     """The preconditioning block of ``split`` when the first split holds
     the mechanics (see ``VIFieldSplit``): an approximation of its Schur
     complement A_ss - A_s,m K^-1 A_m,s with respect to the mechanics m,
@@ -359,7 +380,11 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
       pressure on a closed fracture this is the Schur complement, exact with
       lumped weights: lam changes by -p and u does not move, so the
       fracture storage gains the joint compliance d(ac)/d(lam) that the
-      pressure rows see through lam (the fracture analogue of fixed stress);
+      pressure rows see through lam (the fracture analogue of fixed stress).
+      With ``-vi_contact_schur faces`` (``Problem.face_load_blocks``)
+      A_u,s holds the fracture terms of the u rows alone, without the
+      rock's body loads of the wall nodes tied into pf and Tf (Biot,
+      thermal strain), which G takes for face loads (``contact_schur``);
     * A_s,u diag(A_uu)^-1 A_u,s: what the displacement gives of the rest
       (the opening of the open fracture faces under the fluid pressure),
       with the elasticity by its diagonal ("selfp"); not where the model
@@ -385,7 +410,15 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
         ilam = positions("lam", "tau")                        # the contact rows of the glue maps
         Asl = P.createSubMatrix(split.iset, ilam)
         G = maps.recovery(coupled=True)
-        GA = G.matMult(Aus)
+        if faces is not None:                               # the faces' loads alone (full numbering)
+            ius = [PETSc.IS().createGeneral(r.astype(compat.INT), comm=comm)
+                   for r in (rows[np.isin(rows, context.fields["u"])], split.rows)]
+            Afs = faces.createSubMatrix(*ius)
+            GA = G.matMult(Afs)
+            for obj in (*ius, Afs):
+                obj.destroy()
+        else:
+            GA = G.matMult(Aus)
         terms.append((-1.0, Asl.matMult(GA)))
         for obj in (ilam, Asl, G, GA):
             obj.destroy()

@@ -23,7 +23,7 @@ from petsc4py import PETSc
 from . import compat
 from .assembly import Assembler, FieldScale
 from .constraints import Constraints, Dirichlet
-from .fields import Discretisation
+from .fields import Discretisation, Domain, base_field
 from .model import Model, PointTerm, Region
 
 
@@ -55,8 +55,7 @@ class Problem:
         # puts one, e.g. the contact rows), as MatDiagonalSet in SNES VI needs
         self._diagonal = np.arange(lo, hi, dtype=compat.INT)
         self.J: PETSc.Mat | None = None
-        self._pc_blocks: PETSc.Mat | None = None
-        self._pc_assemblers: list[Assembler] = []
+        self._term_blocks: dict[str, tuple[PETSc.Mat, list[Assembler]]] = {}
         self._jacobian_point = None               # (xl, xdl, t, shift) of the last Jacobian
         self.residual_shift = 1.0                 # 1/dt of a residual evaluated without a TS
         self._jvals: np.ndarray | None = None     # the Jacobian's COO values (reused buffer)
@@ -191,8 +190,7 @@ class Problem:
         xl, xdl = self.local_arrays(X, t, Xdot)
         compat.coo_set_values(P, self.jacobian_values(xl, xdl, t, shift))
         P.assemble()
-        if self.model.preconditioner:           # what preconditioner_blocks assembles at
-            self._jacobian_point = (xl.copy(), xdl.copy(), t, shift)
+        self._jacobian_point = (xl.copy(), xdl.copy(), t, shift)   # for the blocks of some terms, below
         if J != P:
             J.assemble()
         self._ev_jac.end()
@@ -212,21 +210,37 @@ class Problem:
         """The model's ``preconditioner`` blocks (e.g. the fixed-stress term),
         scaled like the Jacobian, at the state, time and shift of the last
         Jacobian; None when the model has none."""
-        if not self.model.preconditioner or self._jacobian_point is None:
+        return self._terms_at_jacobian_point("preconditioner", self.model.preconditioner)
+
+    def face_load_blocks(self) -> PETSc.Mat | None:
+        """The Jacobian's terms whose test function is the displacement on a
+        fracture region (the faces' loads: the fracture fluid pressure and
+        the contact traction on the walls, physics.md eq. (4)), without the
+        rock's body terms (Biot, thermal strain), at the last Jacobian's
+        point; None when the model has none."""
+        terms = [j for j in self.model.jacobians
+                 if j.region.domain != Domain.MATRIX and base_field(j.test) == "u"]
+        return self._terms_at_jacobian_point("face_loads", terms)
+
+    def _terms_at_jacobian_point(self, key: str, terms: list) -> PETSc.Mat | None:
+        """The matrix of the Jacobian ``terms`` alone (full-system numbering,
+        scaled like the Jacobian; its pattern made once per ``key``) at the
+        last Jacobian's state, time and shift."""
+        if not terms or self._jacobian_point is None:
             return None
-        if self._pc_blocks is None:
-            terms = Model(self.model.fields, [], self.model.preconditioner)
-            regions = sorted({j.region for j in self.model.preconditioner})
-            self._pc_assemblers = [Assembler(self.disc, terms, self.scales, region=r,
-                                             inv_rscale=self.inv_rscale) for r in regions]
-            patterns = [a.coo_pattern() for a in self._pc_assemblers]
-            self._pc_blocks = compat.coo_matrix(self.dm, np.concatenate([r for r, _ in patterns]),
-                                                np.concatenate([c for _, c in patterns]))
+        if key not in self._term_blocks:
+            model = Model(self.model.fields, [], terms)
+            assemblers = [Assembler(self.disc, model, self.scales, region=r, inv_rscale=self.inv_rscale)
+                          for r in sorted({j.region for j in terms})]
+            patterns = [a.coo_pattern() for a in assemblers]
+            mat = compat.coo_matrix(self.dm, np.concatenate([r for r, _ in patterns]),
+                                    np.concatenate([c for _, c in patterns]))
+            self._term_blocks[key] = (mat, assemblers)
+        mat, assemblers = self._term_blocks[key]
         xl, xdl, t, shift = self._jacobian_point
-        compat.coo_set_values(self._pc_blocks, np.concatenate(
-            [a.jacobian_values(xl, xdl, t, shift) for a in self._pc_assemblers]))
-        self._pc_blocks.assemble()
-        return self._pc_blocks
+        compat.coo_set_values(mat, np.concatenate([a.jacobian_values(xl, xdl, t, shift) for a in assemblers]))
+        mat.assemble()
+        return mat
 
     # -- residual scaling --------------------------------------------------------------------
     def auto_residual_scales(self, t: float, shift: float) -> dict[str, float]:

@@ -55,6 +55,33 @@ def test_contact_glue_gives_the_fracture_storage(tmp_path):
     assert c["status"] == "failed" and c["steps"] == 0
 
 
+def test_contact_schur_takes_the_face_loads_alone(tmp_path):
+    """The coupled MMS, fracture closed (every field, the rock's pressure and
+    temperature nodes on the walls tied into pf and Tf): the contact-Schur
+    term built from the fracture terms of the u rows
+    (``-vi_contact_schur faces``) completes in its 2 steps; built from every
+    term of the u rows (``all``, the default, which Scene 2 needs: the Biot
+    and thermal-strain body loads of the tied wall nodes, which the
+    contact's recovery map takes for face loads: the control) the linear
+    solves fail and steps are rejected (measured: 3 of 7, 500 Krylov
+    iterations)."""
+    common = ("-options_file", f"{ROOT}/options/scenes/coupled_mms.opts", "-thm_coupled_mms_state", "closed",
+              *BLOCK)
+    runs = {}
+    for mode in ("faces", "all"):
+        _, runs[mode] = run_petthm("coupled_mms", tmp_path / mode, *common, "-vi_contact_schur", mode)
+    print({m: (s["steps"], s["rejected_steps"], s["ksp_iterations"]) for m, s in runs.items()})
+    assert runs["faces"]["status"] == "completed" and runs["faces"]["rejected_steps"] == 0
+    assert runs["faces"]["ksp_iterations"] / runs["faces"]["snes_iterations"] <= 110
+    assert runs["all"]["rejected_steps"] >= 2
+
+
+def test_contact_schur_option_is_checked(tmp_path):
+    proc, _ = run_petthm("contact_patch", tmp_path, *BLOCK, "-vi_contact_schur", "some", check=False)
+    assert proc.returncode == 2 and "-vi_contact_schur" in proc.stderr and "faces, all, off" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
 def test_p_multigrid_for_p2_displacement(tmp_path):
     """P2 u (3D Terzaghi, a 4 m wide column): the two-level p-multigrid of
     the elasticity needs clearly fewer Krylov iterations than GAMG on P2
