@@ -364,6 +364,22 @@ def _commit() -> str:
         return "?"
 
 
+def kept_convergence_section(doc: str) -> list[str]:
+    """--stability-only: the convergence section of the report in ``doc``,
+    kept as it was, with the line that says which run wrote it."""
+    if not os.path.exists(doc):
+        return []
+    text = open(doc).read().splitlines()
+    written = next((ln for ln in text if ln.startswith("Written by")), "")
+    start = text.index("## Convergence") if "## Convergence" in text else None
+    if start is None:
+        return []
+    end = text.index("## Stiff and extreme cases") if "## Stiff and extreme cases" in text else len(text)
+    origin = written.split(").", 1)[0].replace("Written by", "Kept from the report written by") + ")"
+    return [text[start], "", f"({origin}; `--stability-only` ran the stiff and extreme cases alone.)",
+            *text[start + 1:end]]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "verification_report"))
@@ -409,6 +425,8 @@ def main() -> int:
                   *[f"* {c.name}: {c.note}." for c in cases if c.note], "",
                   "![work-precision](../benchmarks/results/verification_report/verification_work_precision.png)",
                   ""]
+    elif a.stability_only and not pick:
+        lines += kept_convergence_section(a.doc)
     if stab_rows:
         lines += ["## Stiff and extreme cases", "", *stability_markdown(stab_rows), ""]
     if a.doc and not pick:
