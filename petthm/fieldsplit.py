@@ -281,9 +281,9 @@ class VIFieldSplit:
             ksp.getPC().setAttr(SPLIT, (weakref.ref(context), split.rows, own_maps))
         opts = PETSc.Options(self.inner.getOptionsPrefix())
         extra = context.problem.preconditioner_blocks() if opts.getBool("fixed_stress", True) else None
-        glue = maps if contact_schur(opts) != "off" else None
-        faces = context.problem.face_load_blocks() if glue is not None and contact_schur(opts) == "faces" \
-            else None
+        schur = contact_schur(opts)
+        glue = maps if schur != "off" else None
+        faces = context.problem.face_load_blocks() if glue is not None and schur == "faces" else None
         mech = context.holds("u", splits[0].rows)
         for split in splits[1:]:                                # their preconditioning blocks
             Sp = split_block(P, split, rows, context, glue, extra, faces) if mech else None
@@ -397,11 +397,14 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
     r0 = P.getOwnershipRange()[0]
     has_extra = extra is not None and probes.global_count(comm, np.isin(split.rows, _rows_of(extra))) > 0
 
-    def positions(*fields):
+    def held(*fields):
         mine = np.zeros(len(rows), dtype=bool)
         for field in fields:
             mine |= np.isin(rows, context.fields.get(field, ()))
-        return PETSc.IS().createGeneral((np.flatnonzero(mine) + r0).astype(compat.INT), comm=comm)
+        return mine
+
+    def positions(*fields):
+        return PETSc.IS().createGeneral((np.flatnonzero(held(*fields)) + r0).astype(compat.INT), comm=comm)
     iu = positions("u")
     S = P.createSubMatrix(split.iset, split.iset)
     Aus = P.createSubMatrix(iu, split.iset)
@@ -412,7 +415,7 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
         G = maps.recovery(coupled=True)
         if faces is not None:                               # the faces' loads alone (full numbering)
             ius = [PETSc.IS().createGeneral(r.astype(compat.INT), comm=comm)
-                   for r in (rows[np.isin(rows, context.fields["u"])], split.rows)]
+                   for r in (rows[held("u")], split.rows)]
             Afs = faces.createSubMatrix(*ius)
             GA = G.matMult(Afs)
             for obj in (*ius, Afs):
