@@ -13,7 +13,12 @@ called once per batch, and the results are contracted back:
 Physical gradients are mapped to the reference cell (J^-1), so every
 contraction is one BLAS matrix product with a tensor of the reference basis.
 The Jacobian's COO pattern is fixed at set-up; each re-assembly only
-computes the value array and calls MatSetValuesCOO.
+computes the value array and calls MatSetValuesCOO.  Terms declared
+``constant`` (linear elasticity and its couplings) are computed once: the
+caller's value buffer keeps them (``jacobian_values(keep_constant=True)``).
+P1 fields (gradients constant over an affine cell) take their gradients and
+the residual's flux term from the cell's physical basis gradients, computed
+once, at one point per cell.
 
 Scaling: unknowns are stored as x_hat = (x - offset)/scale per field and
 residual rows are divided by a per-field reference ``rscale`` so that
@@ -64,6 +69,9 @@ class _Tab:
         nq, nb = t.phi.shape
         # D[q*d+k, i] = dphi[q, i, k]
         self.D = np.ascontiguousarray(t.dphi.transpose(0, 2, 1).reshape(nq * dim, nb))
+        # P1 on a simplex: the gradients are the same at every point (an affine
+        # cell's physical gradients are then constant over the cell)
+        self.constant_grad = bool(np.allclose(t.dphi, t.dphi[:1], rtol=0.0, atol=1e-13))
 
 
 @dataclass
@@ -94,6 +102,11 @@ class _KeptWriter:
             kept = values[self.keep[self.pos:self.pos + n]]
             self.out[self.kpos:self.kpos + kept.size] = kept
             self.kpos += kept.size
+        self.pos += n
+
+    def skip(self, n: int) -> None:
+        """Leave the next ``n`` entries of the sequence as they are in ``out``."""
+        self.kpos += n if self.all else int(np.count_nonzero(self.keep[self.pos:self.pos + n]))
         self.pos += n
 
 
@@ -131,6 +144,7 @@ class Assembler:
         self._tabs = {(p, dual): _Tab(dim, p, self.rule.points, dual) for p in (1, 2) for dual in duals}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
         self._ref_cache = {}
+        self._basis_gradients = {}
         self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in self.model.facets}
         self._build_pattern()
 
@@ -160,6 +174,20 @@ class Assembler:
 
     def tab(self, name) -> _Tab:
         return self._tabs[self.basis(name)]
+
+    def basis_gradients(self, name, cells) -> np.ndarray:
+        """Physical gradients of the basis functions of a field whose
+        reference gradients are constant (``_Tab.constant_grad``: P1), on each
+        cell: B[c, i, a] (nc, nb, dim); computed once (the geometry is fixed)."""
+        key = self.basis(name)
+        if key not in self._basis_gradients:
+            dphi = self._tabs[key].dphi[0]                                  # (nb, r)
+            Jinv = self.mesh.Jinv                                           # (ncells, r, d)
+            B = dphi[None, :, 0, None] * Jinv[:, None, 0, :]
+            for k in range(1, dphi.shape[1]):
+                B += dphi[None, :, k, None] * Jinv[:, None, k, :]
+            self._basis_gradients[key] = B
+        return self._basis_gradients[key][cells]
 
     def basis_laplacian(self, name, cells) -> np.ndarray:
         """Laplacian of every basis function on each cell, (nc, nb)."""
@@ -245,8 +273,11 @@ class Assembler:
                     r = tab.phi.T @ (W[:, :, None] * term.f0(ctx))          # (nc, nb, m)
                 if term.f1 is not None:
                     f1 = term.f1(ctx)                                       # (nc, nq, m, d)
-                    f1ref = reference_flux(W[:, :, None, None] * f1, ctx.Jinv)
-                    r = r + tab.D.T @ f1ref.reshape(nc, -1, f1.shape[2])
+                    if tab.constant_grad:
+                        r = r + self._constant_gradient_flux(term.field, cells, W, f1)
+                    else:
+                        f1ref = reference_flux(W[:, :, None, None] * f1, ctx.Jinv)
+                        r = r + tab.D.T @ f1ref.reshape(nc, -1, f1.shape[2])
                 self._scatter(out, term.field, cells, r)
         for ft in self.model.facets:
             for fb in self._facets[ft.boundary]:
@@ -256,20 +287,42 @@ class Assembler:
                 self._scatter(out, ft.field, fb.cells, r)
         return out
 
+    def _constant_gradient_flux(self, name, cells, W, f1):
+        """sum_q W grad phi_i . f1 for test functions with gradients constant
+        over the cell (P1): the cell integral of the flux against the
+        physical basis gradients, (nc, nb, m)."""
+        if f1.shape[1] == 1:                                               # constant over the cell too
+            F = f1[:, 0] * W.sum(axis=1)[:, None, None]
+        else:
+            F = np.einsum("cq,cqma->cma", W, f1)
+        B = self.basis_gradients(name, cells)                              # (nc, nb, d)
+        r = B[:, :, None, 0] * F[:, None, :, 0]
+        for a in range(1, B.shape[2]):
+            r += B[:, :, None, a] * F[:, None, :, a]
+        return r
+
     def _scatter(self, out, name, cells, r):
         idx = self.dofs(name)[cells].ravel()
         out += np.bincount(idx, weights=np.ravel(r) * self.inv_rscale[idx], minlength=out.size)
 
     # -- Jacobian -------------------------------------------------------------
-    def jacobian_values(self, xl, xdl, t, shift, out: np.ndarray | None = None) -> np.ndarray:
+    def jacobian_values(self, xl, xdl, t, shift, out: np.ndarray | None = None,
+                        keep_constant: bool = False) -> np.ndarray:
         """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot, the
         unknowns' entries only (``coo_pattern``), written into ``out`` (of
-        ``nnz`` entries) when it is given."""
+        ``nnz`` entries) when it is given.  ``keep_constant``: the entries of
+        the ``constant`` terms are left as they are in ``out`` (the caller
+        filled it before, with the same scaling)."""
+        if keep_constant and out is None:
+            raise ValueError("keep_constant needs the buffer of an earlier assembly")
         out = np.empty(self.nnz) if out is None else out
         writer = _KeptWriter(out, self._keep)
         for cells in self._chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
             for jb in self.model.jacobians:
+                if keep_constant and jb.constant:
+                    writer.skip(self._block_size(jb, cells))
+                    continue
                 K = self._cell_block(jb, ctx, cells)
                 rowfac = self.inv_rscale[self.dofs(jb.test)[cells]] * self.scale(jb.trial).scale
                 writer.put((K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel())
@@ -284,6 +337,12 @@ class Assembler:
                 rowfac = self.inv_rscale[self.dofs(ft.field)[fb.cells]] * sc.scale
                 writer.put((K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel())
         return out
+
+    def _block_size(self, jb, cells: slice) -> int:
+        """Number of COO entries of one term on a batch of cells."""
+        fF, fG = self.disc.field(jb.test), self.disc.field(jb.trial)
+        nbF, nbG = self.tab(jb.test).phi.shape[1], self.tab(jb.trial).phi.shape[1]
+        return (cells.stop - cells.start) * nbF * fF.ncomp * nbG * fG.ncomp
 
     @staticmethod
     def _mass_like(g0w, phiF, phiG):

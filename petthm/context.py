@@ -105,24 +105,31 @@ class CellContext:
         return self._cache[key]
 
     def grad(self, name):
+        """Gradient (nc, nq, ncomp, dim); (nc, 1, ncomp, dim) where it is
+        constant over each cell (P1 fields)."""
         key = ("g", name)
         if key not in self._cache:
-            tab = self._asm.tab(name)
-            X = self._nodal(name)
-            nc, nq, r = X.shape[0], tab.phi.shape[0], self.Jinv.shape[1]
-            G = (tab.D @ X).reshape(nc, nq, r, -1)                   # (nc, nq, k, m)
-            self._cache[key] = physical_gradient(G, self.Jinv)
+            self._cache[key] = self._gradient(name, self._nodal(name))
         return self._cache[key]
 
     def grad_dot(self, name):
-        """Gradient of the time derivative (nc, nq, ncomp, dim)."""
+        """Gradient of the time derivative (nc, nq, ncomp, dim) (or nq = 1, as ``grad``)."""
         key = ("gd", name)
         if key not in self._cache:
-            tab = self._asm.tab(name)
-            X = self._nodal(name, dot=True)
-            nc, nq, r = X.shape[0], tab.phi.shape[0], self.Jinv.shape[1]
-            self._cache[key] = physical_gradient((tab.D @ X).reshape(nc, nq, r, -1), self.Jinv)
+            self._cache[key] = self._gradient(name, self._nodal(name, dot=True))
         return self._cache[key]
+
+    def _gradient(self, name, X):
+        """Physical gradient of the field with nodal values X (nc, nb, m)."""
+        tab = self._asm.tab(name)
+        if tab.constant_grad:          # one point per cell: sum_i X_i grad phi_i
+            B = self._asm.basis_gradients(name, self._cells)                 # (nc, nb, d)
+            G = X[:, 0, :, None] * B[:, None, 0, :]
+            for i in range(1, B.shape[1]):
+                G += X[:, i, :, None] * B[:, None, i, :]
+            return G[:, None]
+        nc, nq, r = X.shape[0], tab.phi.shape[0], self.Jinv.shape[1]
+        return physical_gradient((tab.D @ X).reshape(nc, nq, r, -1), self.Jinv)
 
     def lap(self, name):
         key = ("l", name)

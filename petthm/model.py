@@ -76,6 +76,10 @@ class CellJacobian:
     g3: Optional[Kernel] = None
     g2_lap: Optional[Kernel] = None
     region: Region = MATRIX
+    #: the block depends on neither the state, the time nor the shift (a
+    #: linear term with constant coefficients, e.g. elasticity): ``Problem``
+    #: assembles it once and keeps its values until the residual scaling changes
+    constant: bool = False
 
 
 @dataclass(frozen=True)

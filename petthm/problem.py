@@ -59,6 +59,7 @@ class Problem:
         self._jacobian_point = None               # (xl, xdl, t, shift) of the last Jacobian
         self.residual_shift = 1.0                 # 1/dt of a residual evaluated without a TS
         self._jvals: np.ndarray | None = None     # the Jacobian's COO values (reused buffer)
+        self._jvals_constant = False              # it holds the constant terms' values (model.CellJacobian)
         self._ev_res = PETSc.Log.Event("thm.residual")
         self._ev_jac = PETSc.Log.Event("thm.jacobian")
 
@@ -174,10 +175,13 @@ class Problem:
             [len(self._diagonal)]
         if self._jvals is None or self._jvals.size != sum(sizes):
             self._jvals = np.empty(sum(sizes))
+            self._jvals_constant = False
         pos = 0
         for a in self.assemblers.values():
-            a.jacobian_values(xl, xdl, t, shift, out=self._jvals[pos:pos + a.nnz])
+            a.jacobian_values(xl, xdl, t, shift, out=self._jvals[pos:pos + a.nnz],
+                              keep_constant=self._jvals_constant)
             pos += a.nnz
+        self._jvals_constant = True
         for p in self.points:
             v = p.jacobian_values(xl, t, self.scales, self.inv_rscale)
             self._jvals[pos:pos + v.size] = v
@@ -274,6 +278,7 @@ class Problem:
 
     def _update_row_scales(self):
         self.inv_rscale[:] = Assembler.default_inv_rscale(self.disc, self.scales)
+        self._jvals_constant = False              # the constant terms' values change with the scaling
 
 
 def _row_max_abs(J: PETSc.Mat) -> PETSc.Vec:

@@ -107,14 +107,15 @@ def elastic_terms(el: Elastic) -> tuple[list, list]:
     """Momentum balance of ``el.u`` and the Biot term of the flow equation."""
     res = [CellResidual(el.u, partial(_body_f0, el) if el.body_force else None, partial(stress, el),
                         region=el.region)]
-    jac = [CellJacobian(el.u, el.u, g3=partial(_g3_uu, el), region=el.region)]
+    jac = [CellJacobian(el.u, el.u, g3=partial(_g3_uu, el), region=el.region, constant=True)]
     if el.p is not None and el.biot:
-        jac.append(CellJacobian(el.u, el.p, g2=partial(_g2_coupling, el.biot, el.dim), region=el.region))
+        jac.append(CellJacobian(el.u, el.p, g2=partial(_g2_coupling, el.biot, el.dim), region=el.region,
+                                constant=True))
         res.append(CellResidual(el.p, partial(_biot_f0, el), None, region=el.region))
         jac.append(CellJacobian(el.p, el.u, g1=partial(_biot_g1, el), region=el.region))
     if el.T is not None and el.thermal_expansion:
         jac.append(CellJacobian(el.u, el.T, g2=partial(_g2_coupling, el.bulk * el.thermal_expansion, el.dim),
-                                region=el.region))
+                                region=el.region, constant=True))
     return res, jac
 
 

@@ -108,3 +108,47 @@ def test_cell_constant_and_pointwise_coefficients_give_the_same_matrix(tmp_path)
         xl = np.linspace(-1, 1, p.disc.nlocal)
         vals.append(p.region(MATRIX).jacobian_values(xl, xl, 0.0, 2.0))
     assert np.allclose(vals[0], vals[1], rtol=1e-12, atol=1e-12 * np.abs(vals[1]).max())
+
+
+def _split_vector_problem(tmp_path, declared_constant: str):
+    """The vector operator with its state-dependent g0 and its constant g3 as
+    two terms; ``declared_constant`` names the term declared ``constant``."""
+    p = _vector_problem(tmp_path, constant=True)
+    jb = p.region(MATRIX).model.jacobians[0]
+    terms = [dataclasses.replace(jb, g3=None, constant=declared_constant == "g0"),
+             dataclasses.replace(jb, g0=None, constant=declared_constant == "g3")]
+    p.model.jacobians[:] = terms
+    p.region(MATRIX).model.jacobians[:] = terms
+    p.region(MATRIX)._build_pattern()
+    return p
+
+
+@pytest.mark.parametrize("declared_constant", ["g3", "g0"])
+def test_constant_terms_are_assembled_once(tmp_path, declared_constant):
+    """``Problem`` keeps the values of the ``constant`` terms (elasticity) in
+    its Jacobian buffer: a re-assembly at another state, and one after the
+    residual scaling changed, give what a fresh problem assembles.  Negative
+    control: a state-dependent term (g0) declared constant is caught."""
+    p = _split_vector_problem(tmp_path, declared_constant)
+    n = p.disc.nlocal
+    xa, xb = np.linspace(-1, 1, n), np.cos(np.arange(n))
+    p.jacobian_values(xa, xa, 0.0, 2.0)
+
+    def fresh(x, rscale=1.0):
+        q = _split_vector_problem(tmp_path, declared_constant)
+        q.scales["u"].rscale = rscale
+        q._update_row_scales()
+        return q.jacobian_values(x, x, 0.0, 2.0).copy()
+
+    kept = p.jacobian_values(xb, xb, 0.0, 2.0).copy()
+    p.scales["u"].rscale = 3.0
+    p._update_row_scales()
+    p.jacobian_values(xa, xa, 0.0, 2.0)
+    rescaled = p.jacobian_values(xb, xb, 0.0, 2.0).copy()
+    diff = [np.abs(kept - fresh(xb)).max(), np.abs(rescaled - fresh(xb, 3.0)).max()]
+    scale = np.abs(kept).max()
+    print("kept constant terms", declared_constant, diff, scale)
+    if declared_constant == "g3":
+        assert max(diff) <= 1e-14 * scale
+    else:
+        assert min(diff) > 1e-6 * scale
