@@ -30,7 +30,7 @@ from .output import FieldWriter, History, write_summary
 from .problem import Problem
 from .scenes.base import REGISTRY
 from .solver import (SOLVER_DEFAULTS, StepControl, TimeStepper, error_control_defaults, failure_message,
-                     propose_defaults, solver_defaults_by_size)
+                     propose_defaults, serial_plane_direct, solver_defaults_by_size)
 
 #: options PETSc reads only at finalize or start-up; never "unused"
 _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
@@ -260,6 +260,7 @@ class Run:
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
         scene_defaults = dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm),
                               **(error_control_defaults(control) if run.dt_control == "error" else {}))
+        scene_defaults = serial_plane_direct(scene_defaults, mesh.dim, self.comm.size, bool(model.bounds))
         propose_defaults(solver_defaults_by_size(scene_defaults, model.has("u"), problem.X.getSize(),
                                                  run.direct_max_unknowns))
         self._pop("setup", st, t0)
