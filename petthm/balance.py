@@ -65,7 +65,7 @@ class BalanceMonitor:
         Xdot.waxpy(-1.0, X0, X)
         Xdot.scale(1.0 / dt)
         xl, xdl = pb.local_arrays(X, t, Xdot)
-        rl = pb.local_residual(xl, xdl, t, 1.0 / dt)
+        rl = pb.step_residual(X, t, 1.0 / dt, xl, xdl)
         self.last_residual = rl
         S1 = self.stored(xl, t)
         out = {}
