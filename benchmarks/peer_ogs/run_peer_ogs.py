@@ -70,6 +70,9 @@ OGS_LEVELS = {1: (4.0, 0.2, 1.5, 0), 2: (2.0, 0.1, 1.3, 1), 3: (1.0, 0.05, 1.2, 
 PETTHM_LEVELS = {0: (4.0, 20.0, 0), 1: (2.0, 15.0, 1), 2: (1.0, 10.0, 2), 3: (0.5, 10.0, 3)}
 #: petthm's layered-mesh variant (-thm_lauwerier_layer), levels as above with "l" prefixed
 PETTHM_LAYER, PETTHM_LAYER_GROWTH = 0.05, 1.5
+#: petthm with OGS's wall layers ("w" prefixed): (fracture mesh size m, far mesh size m,
+#: first layer m, layer growth, schedule); w0 has OGS R1's wall layer and schedule
+PETTHM_WALL_LEVELS = {0: (3.0, 30.0, 0.2, 1.6, 0), 1: (2.0, 30.0, 0.1, 1.5, 1)}
 
 
 def width(t_end: float) -> float:
@@ -355,16 +358,20 @@ def _write_history(path: Path, t, T, root: Path):
 
 # ---------------------------------------------------------------- petthm
 def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
-    layered = case.startswith("l")
-    level = int(case.lstrip("l"))
-    fs, ms, sched = PETTHM_LEVELS[level]
+    layered, wall = case.startswith("l"), case.startswith("w")
+    level = int(case.lstrip("lw"))
+    if wall:
+        fs, ms, layer, layer_growth, sched = PETTHM_WALL_LEVELS[level]
+    else:
+        fs, ms, sched = PETTHM_LEVELS[level]
+        layer, layer_growth = PETTHM_LAYER, PETTHM_LAYER_GROWTH
     g, dtmax = SCHEDULES[sched]
     d = out / f"petthm_P2_{case}"
     shutil.rmtree(d, ignore_errors=True)
     opts = ["-thm_final_time", t_end, "-thm_fe_degree", 2, "-thm_lauwerier_fracture_size", fs,
             "-thm_mesh_size", ms, "-thm_dt_initial", DT0, "-thm_dt_growth", g, "-thm_dt_max", dtmax]
-    if layered:
-        opts += ["-thm_lauwerier_layer", PETTHM_LAYER, "-thm_lauwerier_layer_growth", PETTHM_LAYER_GROWTH]
+    if layered or wall:
+        opts += ["-thm_lauwerier_layer", layer, "-thm_lauwerier_layer_growth", layer_growth]
     cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", str(d), "-thm_quiet",
            *map(str, opts)]
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
@@ -380,9 +387,10 @@ def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
     t = np.array([float(r["time"]) for r in rows])
     T = np.array([float(r["production_temperature"]) for r in rows])
     _write_history(d / "outlet_history.csv", t, T, root)
-    kind = f"layered {PETTHM_LAYER} m x{PETTHM_LAYER_GROWTH}" if layered else "graded"
+    kind = f"layered {layer} m x{layer_growth}" if layered or wall else "graded"
     mesh = f"P2 {kind}, fracture h {fs:g} m, far {ms:g} m"
-    return {"code": "petthm P2", "case": f"L{level}" + ("-layered" if layered else ""), "mesh": mesh,
+    name = f"W{level}-layered" if wall else f"L{level}" + ("-layered" if layered else "")
+    return {"code": "petthm P2", "case": name, "mesh": mesh,
             "cells": s["cells"], "dofs": sum(s["dofs"].values()), "steps": s["steps"], "wall_s": wall,
             "error_K": score(t, T, root), "load_before": load, "schedule": sched,
             "petthm_wall_total_s": s["wall_time"]["total"],
@@ -491,7 +499,8 @@ def main(argv=None):
     ap.add_argument("--work", default=None, help="run directories (default: OUT/runs)")
     ap.add_argument("--ogs-levels", default="1,2,3")
     ap.add_argument("--petthm-levels", default="0,1,2",
-                    help="petthm P2 levels; 'lN' for the layered mesh of level N (e.g. 0,1,2,l0,l1)")
+                    help="petthm P2 levels; 'lN' for the layered mesh of level N (e.g. 0,1,2,l0,l1), "
+                         "'wN' for the meshes with OGS's wall layers (PETTHM_WALL_LEVELS)")
     ap.add_argument("--repeat", type=int, default=1, help="run everything this many times (best wall kept)")
     ap.add_argument("--final-time", type=float, default=1e9)
     ap.add_argument("--stabilization", default="none", choices=("none", "FullUpwind"),
