@@ -358,9 +358,9 @@ def _write_history(path: Path, t, T, root: Path):
 
 # ---------------------------------------------------------------- petthm
 def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
-    layered, wall = case.startswith("l"), case.startswith("w")
+    layered, ogs_layer = case.startswith("l"), case.startswith("w")
     level = int(case.lstrip("lw"))
-    if wall:
+    if ogs_layer:
         fs, ms, layer, layer_growth, sched = PETTHM_WALL_LEVELS[level]
     else:
         fs, ms, sched = PETTHM_LEVELS[level]
@@ -370,7 +370,7 @@ def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
     shutil.rmtree(d, ignore_errors=True)
     opts = ["-thm_final_time", t_end, "-thm_fe_degree", 2, "-thm_lauwerier_fracture_size", fs,
             "-thm_mesh_size", ms, "-thm_dt_initial", DT0, "-thm_dt_growth", g, "-thm_dt_max", dtmax]
-    if layered or wall:
+    if layered or ogs_layer:
         opts += ["-thm_lauwerier_layer", layer, "-thm_lauwerier_layer_growth", layer_growth]
     cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", str(d), "-thm_quiet",
            *map(str, opts)]
@@ -387,9 +387,9 @@ def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
     t = np.array([float(r["time"]) for r in rows])
     T = np.array([float(r["production_temperature"]) for r in rows])
     _write_history(d / "outlet_history.csv", t, T, root)
-    kind = f"layered {layer} m x{layer_growth}" if layered or wall else "graded"
+    kind = f"layered {layer} m x{layer_growth}" if layered or ogs_layer else "graded"
     mesh = f"P2 {kind}, fracture h {fs:g} m, far {ms:g} m"
-    name = f"W{level}-layered" if wall else f"L{level}" + ("-layered" if layered else "")
+    name = f"W{level}-layered" if ogs_layer else f"L{level}" + ("-layered" if layered else "")
     return {"code": "petthm P2", "case": name, "mesh": mesh,
             "cells": s["cells"], "dofs": sum(s["dofs"].values()), "steps": s["steps"], "wall_s": wall,
             "error_K": score(t, T, root), "load_before": load, "schedule": sched,
@@ -472,10 +472,11 @@ def plot(rows, path: Path, t_end: float):
     fig, ax = plt.subplots(figsize=(6.2, 4.6))
     series = {}
     for r in rows:
-        key = r["code"] + (" layered" if "layered" in r["case"] else "")
+        key = r["code"] + (" OGS's wall layers" if r["case"].startswith("W") else
+                           " layered" if "layered" in r["case"] else "")
         series.setdefault(key, []).append(r)
     style = {"OGS 6.5.9": ("o", "-"), "OGS 6.5.9 BiCGSTAB": ("D", ":"), "petthm P2": ("s", "-"),
-             "petthm P2 layered": ("^", "--")}
+             "petthm P2 layered": ("^", "--"), "petthm P2 OGS's wall layers": ("v", "-.")}
     for key, rs in series.items():
         rs = sorted(rs, key=lambda r: r["wall_s"])
         mk, ls = style.get(key, ("x", ":"))
