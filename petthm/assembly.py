@@ -182,11 +182,8 @@ class Assembler:
         key = self.basis(name)
         if key not in self._basis_gradients:
             dphi = self._tabs[key].dphi[0]                                  # (nb, r)
-            Jinv = self.mesh.Jinv                                           # (ncells, r, d)
-            B = dphi[None, :, 0, None] * Jinv[:, None, 0, :]
-            for k in range(1, dphi.shape[1]):
-                B += dphi[None, :, k, None] * Jinv[:, None, k, :]
-            self._basis_gradients[key] = B
+            B = physical_gradient(dphi.T[None, None], self.mesh.Jinv)                  # (ncells, 1, nb, d)
+            self._basis_gradients[key] = np.ascontiguousarray(B[:, 0])
         return self._basis_gradients[key][cells]
 
     def basis_laplacian(self, name, cells) -> np.ndarray:

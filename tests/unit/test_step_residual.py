@@ -2,24 +2,11 @@
 solver's last one when that was evaluated at the accepted state
 (``Problem.step_residual``), and is computed afresh otherwise."""
 import numpy as np
-from petsc4py import PETSc
-
-from petthm.app import Run, make_scene
-
-
-def _problem(tmp_path):
-    o = PETSc.Options()
-    for k in list(o.getAll()):
-        o.delValue(k)
-    o.setValue("thm_output_dir", str(tmp_path))
-    o.setValue("thm_mesh_size", 2.0)
-    run = Run(make_scene("heat_erfc"))
-    _, problem, *_ = run.setup(run.build_mesh())
-    return problem
+from conftest import build_problem
 
 
 def test_the_last_residual_is_reused_only_at_its_own_state(tmp_path):
-    p = _problem(tmp_path)
+    p = build_problem(tmp_path, "heat_erfc", thm_mesh_size=2.0)
     X = p.X.copy()
     X.getArray()[:] += np.linspace(0.0, 0.1, X.getLocalSize())
     Xdot = X.duplicate()
