@@ -91,8 +91,8 @@ def main(argv=None) -> int:
         return _fail(f"PETSc could not start with these options (error {e})", rank)
     from .app import run_scene
     from .errors import InputError
-    from .scenes import load_all
-    load_all()
+    from .scenes import load
+    load(scene)
     from petsc4py import PETSc
     try:
         summary = run_scene(scene)

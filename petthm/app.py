@@ -70,8 +70,8 @@ def drop_unused_proposals() -> None:
 
 
 def make_scene(name: str):
-    from .scenes import load_all
-    load_all()
+    from .scenes import load
+    load(name)
     if name not in REGISTRY:
         raise InputError(f"unknown scene '{name}'; scenes: {', '.join(sorted(REGISTRY))}")
     cls = REGISTRY[name]

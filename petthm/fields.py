@@ -344,7 +344,14 @@ class Discretisation:
         return self.offsets[name][self.node_points(name) - self.pstart][:, None] + np.arange(f.ncomp)
 
     def field_node_coordinates(self, name: str) -> np.ndarray:
-        return self.mesh.point_coordinates(self.node_points(name))
+        """Coordinates of the field's nodes (n, dim), computed once per field
+        (read-only: monitors ask for them at every step)."""
+        cache = self.__dict__.setdefault("_node_coordinates", {})
+        if name not in cache:
+            x = self.mesh.point_coordinates(self.node_points(name))
+            x.flags.writeable = False
+            cache[name] = x
+        return cache[name]
 
     def global_sizes(self) -> dict[str, int]:
         """Number of unknowns per field (global, constrained dofs excluded)."""

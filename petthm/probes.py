@@ -60,21 +60,41 @@ def gather_root(comm, a: np.ndarray):
 def nearest(comm, x: np.ndarray, point, values: Sequence[np.ndarray], ord: int = 2) -> list[float]:
     """The values at the node of ``x`` (rows of this rank) nearest to ``point``
     over all ranks (``ord``: the norm of the distance); ties go to the lowest rank."""
+    owner, k = nearest_node(comm, x, point, ord)
+    c = mpi(comm)
+    mine = [float(np.asarray(v)[k]) for v in values] if c.rank == owner else None
+    return c.bcast(mine, root=owner)
+
+
+def nearest_node(comm, x: np.ndarray, point, ord: int = 2) -> tuple[int, int]:
+    """(rank, row of that rank's ``x``) of the node nearest to ``point`` over
+    all ranks; ties go to the lowest rank (the row is -1 on the other ranks)."""
     x = np.asarray(x)
     d = np.linalg.norm(x - np.asarray(point)[None, :x.shape[1]], ord=ord, axis=1) if len(x) else np.zeros(0)
     k = int(np.argmin(d)) if len(d) else 0
     c = mpi(comm)
     best = (float(d[k]), c.rank) if len(d) else (np.inf, c.rank)
     _, owner = c.allreduce(best, op=_op("MINLOC"))
-    mine = [float(np.asarray(v)[k]) for v in values] if c.rank == owner else None
-    return c.bcast(mine, root=owner)
+    return owner, (k if c.rank == owner else -1)
 
 
 # -- probes of a problem's fields ------------------------------------------------------
 def point_value(problem, name: str, point, X=None, t: float = 0.0, component: int = 0) -> float:
-    """SI value of a field's component at the node nearest to ``point``."""
-    v = problem.field_values(name, X, t)[:, component]
-    return nearest(problem.dm.comm, problem.disc.field_node_coordinates(name), point, [v])[0]
+    """SI value of a field's component at the node nearest to ``point`` (the
+    node found once per field and point and kept on the problem: the mesh
+    does not move; monitors ask at every step)."""
+    cache = problem.__dict__.setdefault("_probe_nodes", {})
+    key = (name, tuple(float(v) for v in np.ravel(point)))
+    if key not in cache:
+        cache[key] = nearest_node(problem.dm.comm, problem.disc.field_node_coordinates(name), point)
+    owner, k = cache[key]
+    c = mpi(problem.dm.comm)
+    xl, _ = problem.local_arrays(X or problem.X, t)             # collective (ghost update)
+    value = None
+    if c.rank == owner:
+        sc = problem.scales[name]
+        value = float(xl[problem.disc.field_local_dofs(name)[k, component]] * sc.scale + sc.offset)
+    return c.bcast(value, root=owner)
 
 
 def max_nodal_error(problem, name: str, exact: Callable, X=None, t: float = 0.0, component: int = 0) -> float:

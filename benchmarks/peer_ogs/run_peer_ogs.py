@@ -62,7 +62,8 @@ T_SCORE = 1e4                                      # the error is scored from th
 DT0 = 100.0                                        # first step (s) of every schedule
 
 #: time-step schedules shared by both codes (growth per step, largest step s)
-SCHEDULES = {0: (1.10, 2e7), 1: (1.07, 1e7), 2: (1.05, 5e6), 3: (1.03, 2.5e6)}
+SCHEDULES = {0: (1.10, 2e7), 1: (1.07, 1e7), 2: (1.05, 5e6), 3: (1.03, 2.5e6),
+             4: (1.3, 5e7), 5: (1.2, 2e7)}           # 4, 5: petthm's BDF2 cases only
 #: OGS levels: (element size along the fracture m, first layer h0 m, layer growth, schedule)
 OGS_LEVELS = {1: (4.0, 0.2, 1.5, 0), 2: (2.0, 0.1, 1.3, 1), 3: (1.0, 0.05, 1.2, 2),
               4: (0.5, 0.05, 1.1, 3)}
@@ -73,6 +74,9 @@ PETTHM_LAYER, PETTHM_LAYER_GROWTH = 0.05, 1.5
 #: petthm with OGS's wall layers ("w" prefixed): (fracture mesh size m, far mesh size m,
 #: first layer m, layer growth, schedule); w0 has OGS R1's wall layer and schedule
 PETTHM_WALL_LEVELS = {0: (3.0, 30.0, 0.2, 1.6, 0), 1: (2.0, 30.0, 0.1, 1.5, 1)}
+#: petthm with OGS's wall layers and PETSc's BDF2 (-ts_type bdf -ts_bdf_order 2: second order in
+#: time, so fewer, longer steps; "b" prefixed): as PETTHM_WALL_LEVELS
+PETTHM_BDF2_LEVELS = {0: (3.0, 30.0, 0.2, 1.6, 4), 1: (2.0, 30.0, 0.1, 1.5, 5)}
 
 
 def width(t_end: float) -> float:
@@ -358,10 +362,11 @@ def _write_history(path: Path, t, T, root: Path):
 
 # ---------------------------------------------------------------- petthm
 def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
-    layered, ogs_layer = case.startswith("l"), case.startswith("w")
-    level = int(case.lstrip("lw"))
+    layered, bdf2 = case.startswith("l"), case.startswith("b")
+    ogs_layer = case.startswith("w") or bdf2
+    level = int(case.lstrip("lwb"))
     if ogs_layer:
-        fs, ms, layer, layer_growth, sched = PETTHM_WALL_LEVELS[level]
+        fs, ms, layer, layer_growth, sched = (PETTHM_BDF2_LEVELS if bdf2 else PETTHM_WALL_LEVELS)[level]
     else:
         fs, ms, sched = PETTHM_LEVELS[level]
         layer, layer_growth = PETTHM_LAYER, PETTHM_LAYER_GROWTH
@@ -372,6 +377,8 @@ def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
             "-thm_mesh_size", ms, "-thm_dt_initial", DT0, "-thm_dt_growth", g, "-thm_dt_max", dtmax]
     if layered or ogs_layer:
         opts += ["-thm_lauwerier_layer", layer, "-thm_lauwerier_layer_growth", layer_growth]
+    if bdf2:
+        opts += ["-ts_type", "bdf", "-ts_bdf_order", 2]
     cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", str(d), "-thm_quiet",
            *map(str, opts)]
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
@@ -389,8 +396,9 @@ def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
     _write_history(d / "outlet_history.csv", t, T, root)
     kind = f"layered {layer} m x{layer_growth}" if layered or ogs_layer else "graded"
     mesh = f"P2 {kind}, fracture h {fs:g} m, far {ms:g} m"
-    name = f"W{level}-layered" if ogs_layer else f"L{level}" + ("-layered" if layered else "")
-    return {"code": "petthm P2", "case": name, "mesh": mesh,
+    name = (f"B{level}-layered" if bdf2 else f"W{level}-layered" if ogs_layer
+            else f"L{level}" + ("-layered" if layered else ""))
+    return {"code": "petthm P2 BDF2" if bdf2 else "petthm P2", "case": name, "mesh": mesh,
             "cells": s["cells"], "dofs": sum(s["dofs"].values()), "steps": s["steps"], "wall_s": wall,
             "error_K": score(t, T, root), "load_before": load, "schedule": sched,
             "petthm_wall_total_s": s["wall_time"]["total"],
@@ -472,11 +480,12 @@ def plot(rows, path: Path, t_end: float):
     fig, ax = plt.subplots(figsize=(6.2, 4.6))
     series = {}
     for r in rows:
-        key = r["code"] + (" OGS's wall layers" if r["case"].startswith("W") else
+        key = r["code"] + (" OGS's wall layers" if r["case"][0] in "WB" else
                            " layered" if "layered" in r["case"] else "")
         series.setdefault(key, []).append(r)
     style = {"OGS 6.5.9": ("o", "-"), "OGS 6.5.9 BiCGSTAB": ("D", ":"), "petthm P2": ("s", "-"),
-             "petthm P2 layered": ("^", "--"), "petthm P2 OGS's wall layers": ("v", "-.")}
+             "petthm P2 layered": ("^", "--"), "petthm P2 OGS's wall layers": ("v", "-."),
+             "petthm P2 BDF2 OGS's wall layers": ("P", "-.")}
     for key, rs in series.items():
         rs = sorted(rs, key=lambda r: r["wall_s"])
         mk, ls = style.get(key, ("x", ":"))
@@ -501,7 +510,8 @@ def main(argv=None):
     ap.add_argument("--ogs-levels", default="1,2,3")
     ap.add_argument("--petthm-levels", default="0,1,2",
                     help="petthm P2 levels; 'lN' for the layered mesh of level N (e.g. 0,1,2,l0,l1), "
-                         "'wN' for the meshes with OGS's wall layers (PETTHM_WALL_LEVELS)")
+                         "'wN' for the meshes with OGS's wall layers (PETTHM_WALL_LEVELS), "
+                         "'bN' for those with BDF2 (PETTHM_BDF2_LEVELS)")
     ap.add_argument("--repeat", type=int, default=1, help="run everything this many times (best wall kept)")
     ap.add_argument("--final-time", type=float, default=1e9)
     ap.add_argument("--stabilization", default="none", choices=("none", "FullUpwind"),

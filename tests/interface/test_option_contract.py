@@ -128,3 +128,20 @@ def test_no_scene_declares_an_option_twice():
                      "initial_temperature", "rock_permeability", "fluid_viscosity"):
         assert contract in materials.DECLARED and names.count(contract) >= 2, contract
     assert not np.any([n.startswith("joint_") for n in names])
+
+
+def test_each_scene_loads_from_its_module_alone():
+    """scenes.MODULES names the module that registers each scene (a run imports
+    only that one): every registered scene is in it, with its module; a scene
+    missing from it would still load (through load_all), so the map is checked
+    both ways."""
+    import subprocess
+    import sys
+    from petthm import scenes
+    from petthm.scenes.base import REGISTRY
+    scenes.load_all()
+    assert {n: c.__module__.rsplit(".", 1)[-1] for n, c in REGISTRY.items()} == scenes.MODULES
+    code = ("from petthm import scenes; from petthm.scenes.base import REGISTRY; scenes.load('lauwerier'); "
+            "import sys; print(sorted(REGISTRY), 'petthm.scenes.contact' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "['lauwerier'] False"
