@@ -117,7 +117,7 @@ def bench(path, model, repeat):
     name = model.fields[0].name
     asm = Assembler(disc, model, {name: FieldScale()})
     t0 = time.perf_counter()
-    A = compat.coo_matrix(dm, *asm.coo_pattern())          # as Problem.create_matrix does
+    A = compat.coo_matrix(dm, *asm.coo_pattern(), copy=False)          # as Problem.create_matrix does
     t_prealloc = time.perf_counter() - t0
     rng = np.random.default_rng(0)
     xl = rng.standard_normal(disc.nlocal)

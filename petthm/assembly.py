@@ -84,29 +84,19 @@ class _FacetBatch:
     tabs: dict
 
 
-class _KeptWriter:
-    """Writes consecutive pieces of the full COO value sequence into ``out``,
-    keeping the entries ``keep`` marks (in place: no full-length copy)."""
+class _Writer:
+    """Writes consecutive pieces of the COO value sequence into ``out``."""
 
-    def __init__(self, out: np.ndarray, keep: np.ndarray):
-        self.out, self.keep = out, keep
-        self.pos = self.kpos = 0
-        self.all = bool(keep.all())
+    def __init__(self, out: np.ndarray):
+        self.out, self.pos = out, 0
 
     def put(self, values: np.ndarray) -> None:
         n = values.size
-        if self.all:
-            self.out[self.kpos:self.kpos + n] = values
-            self.kpos += n
-        else:
-            kept = values[self.keep[self.pos:self.pos + n]]
-            self.out[self.kpos:self.kpos + kept.size] = kept
-            self.kpos += kept.size
+        self.out[self.pos:self.pos + n] = values.reshape(-1)
         self.pos += n
 
     def skip(self, n: int) -> None:
         """Leave the next ``n`` entries of the sequence as they are in ``out``."""
-        self.kpos += n if self.all else int(np.count_nonzero(self.keep[self.pos:self.pos + n]))
         self.pos += n
 
 
@@ -210,23 +200,22 @@ class Assembler:
 
     # -- COO pattern ----------------------------------------------------------
     def _block_index(self, test, trial, cells):
+        """Rows and columns of one term's entries on a batch of cells, each
+        (nc, nbF, nbG) (broadcast views: the caller copies them once)."""
         g = self.disc.global_index
         rows = g[self.dofs(test)[cells]]
         cols = g[self.dofs(trial)[cells]]
         R = np.broadcast_to(rows[:, :, None], (len(rows), rows.shape[1], cols.shape[1]))
-        C = np.broadcast_to(cols[:, None, :], R.shape)
-        return R.ravel(), C.ravel()
+        return R, np.broadcast_to(cols[:, None, :], R.shape)
 
     def _build_pattern(self):
-        """Which COO entries of ``jacobian_values``'s order (chunk by chunk,
-        every block of a chunk, then the facet terms) are unknowns' entries
-        (constrained rows and columns have negative indices); the pattern
-        itself is made again when a matrix is created (``coo_pattern``) and
-        not kept: it is 16 bytes per entry."""
-        keep = [(r >= 0) & (c >= 0) for r, c in self._pattern_parts()]
-        self._keep = np.concatenate(keep) if keep else np.zeros(0, dtype=bool)
-        self.nnz = int(self._keep.sum())
-        self._all_kept = bool(self._keep.all())
+        """The number of COO entries of ``jacobian_values``'s order (chunk by
+        chunk, every block of a chunk, then the facet terms).  Constrained
+        rows and columns keep their entries, with negative indices, which
+        PETSc's COO assembly ignores (no mask to apply at every assembly);
+        the pattern itself is made again when a matrix is created
+        (``coo_pattern``) and not kept: it is 8 bytes per entry."""
+        self.nnz = int(sum(r.size for r, _ in self._pattern_parts()))
 
     def _pattern_parts(self):
         for cells in self._chunks():
@@ -238,15 +227,20 @@ class Assembler:
             for fb in self._facets[ft.boundary]:
                 yield self._block_index(ft.field, ft.field, fb.cells)
 
-    def coo_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """Global COO rows and columns of the unknowns' entries, in the order
-        ``jacobian_values`` fills them."""
-        parts = list(self._pattern_parts())
-        if not parts:
-            return np.zeros(0, compat.INT), np.zeros(0, compat.INT)
-        rows = np.concatenate([r for r, _ in parts])
-        cols = np.concatenate([c for _, c in parts])
-        return rows[self._keep], cols[self._keep]
+    def coo_pattern(self, rows: np.ndarray | None = None, cols: np.ndarray | None = None):
+        """Global COO rows and columns (-1: a constrained row or column) in
+        the order ``jacobian_values`` fills them, written into ``rows`` and
+        ``cols`` (``nnz`` entries each) when they are given (a slice of the
+        whole matrix's pattern: no intermediate copies)."""
+        if rows is None:
+            rows, cols = np.empty(self.nnz, compat.INT), np.empty(self.nnz, compat.INT)
+        pos = 0
+        for r, c in self._pattern_parts():
+            n = r.size
+            rows[pos:pos + n].reshape(r.shape)[...] = r
+            cols[pos:pos + n].reshape(c.shape)[...] = c
+            pos += n
+        return rows, cols
 
     # -- residual -------------------------------------------------------------
     def _chunks(self):
@@ -305,15 +299,15 @@ class Assembler:
     # -- Jacobian -------------------------------------------------------------
     def jacobian_values(self, xl, xdl, t, shift, out: np.ndarray | None = None,
                         keep_constant: bool = False) -> np.ndarray:
-        """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot, the
-        unknowns' entries only (``coo_pattern``), written into ``out`` (of
-        ``nnz`` entries) when it is given.  ``keep_constant``: the entries of
+        """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot in
+        ``coo_pattern``'s order, written into ``out`` (of ``nnz`` entries)
+        when it is given.  ``keep_constant``: the entries of
         the ``constant`` terms are left as they are in ``out`` (the caller
         filled it before, with the same scaling)."""
         if keep_constant and out is None:
             raise ValueError("keep_constant needs the buffer of an earlier assembly")
         out = np.empty(self.nnz) if out is None else out
-        writer = _KeptWriter(out, self._keep)
+        writer = _Writer(out)
         for cells in self._chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
             for jb in self.model.jacobians:

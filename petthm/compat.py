@@ -104,26 +104,31 @@ def get_local_section(dm):
 _NATIVE_COO = hasattr(PETSc.Mat, "setPreallocationCOO")
 
 
-def coo_matrix(dm: PETSc.DM, rows: np.ndarray, cols: np.ndarray) -> PETSc.Mat:
+def coo_matrix(dm: PETSc.DM, rows: np.ndarray, cols: np.ndarray, copy: bool = True) -> PETSc.Mat:
     """The DM's matrix (sizes, type, local-to-global map) preallocated from the
     COO pattern alone: DMCreateMatrix's own preallocation, which
     MatSetPreallocationCOO replaces anyway, is skipped
     (DMSetMatrixPreallocateSkip; it cost 2.5-3 s per matrix at 1e4 P2
-    tetrahedra, more than ten Jacobian assemblies)."""
+    tetrahedra, more than ten Jacobian assemblies).  ``copy``: see
+    ``coo_preallocate``."""
     skip = _cfunc("DMSetMatrixPreallocateSkip", ctypes.c_void_p, ctypes.c_int)
     _check(skip(dm.handle, 1), "DMSetMatrixPreallocateSkip")
     try:
         mat = dm.createMat()
     finally:
         _check(skip(dm.handle, 0), "DMSetMatrixPreallocateSkip")
-    coo_preallocate(mat, rows, cols)
+    coo_preallocate(mat, rows, cols, copy)
     return mat
 
 
-def coo_preallocate(mat: PETSc.Mat, rows: np.ndarray, cols: np.ndarray) -> None:
-    """MatSetPreallocationCOO with global indices (negative ones are ignored)."""
-    rows = np.ascontiguousarray(rows, dtype=INT).copy()  # PETSc may overwrite
-    cols = np.ascontiguousarray(cols, dtype=INT).copy()
+def coo_preallocate(mat: PETSc.Mat, rows: np.ndarray, cols: np.ndarray, copy: bool = True) -> None:
+    """MatSetPreallocationCOO with global indices (negative ones are ignored).
+    PETSc may overwrite the index arrays: they are copied unless ``copy`` is
+    False (the caller hands over arrays it does not use again)."""
+    rows = np.ascontiguousarray(rows, dtype=INT)
+    cols = np.ascontiguousarray(cols, dtype=INT)
+    if copy:
+        rows, cols = rows.copy(), cols.copy()
     if _NATIVE_COO:
         mat.setPreallocationCOO(rows, cols)
         return

@@ -219,13 +219,25 @@ class Problem:
     def create_matrix(self) -> PETSc.Mat:
         """The Jacobian matrix (created once, with its COO pattern)."""
         if self.J is None:
-            patterns = [a.coo_pattern() for a in self.assemblers.values()] + \
-                [(p.coo_rows, p.coo_cols) for p in self.points] + [(self._diagonal, self._diagonal)]
-            rows = np.concatenate([r for r, _ in patterns])
-            cols = np.concatenate([c for _, c in patterns])
-            del patterns
-            self.J = compat.coo_matrix(self.dm, rows, cols)
+            rows, cols = self._coo_pattern(list(self.assemblers.values()), [(p.coo_rows, p.coo_cols)
+                                           for p in self.points] + [(self._diagonal, self._diagonal)])
+            self.J = compat.coo_matrix(self.dm, rows, cols, copy=False)
         return self.J
+
+    @staticmethod
+    def _coo_pattern(assemblers, extra=()) -> tuple[np.ndarray, np.ndarray]:
+        """The COO rows and columns of ``assemblers`` (each writes its slice
+        in place) followed by the ``extra`` (rows, cols) pairs."""
+        sizes = [a.nnz for a in assemblers] + [len(r) for r, _ in extra]
+        rows, cols = np.empty(sum(sizes), compat.INT), np.empty(sum(sizes), compat.INT)
+        pos = 0
+        for a in assemblers:
+            a.coo_pattern(rows[pos:pos + a.nnz], cols[pos:pos + a.nnz])
+            pos += a.nnz
+        for r, c in extra:
+            rows[pos:pos + len(r)], cols[pos:pos + len(r)] = r, c
+            pos += len(r)
+        return rows, cols
 
     def preconditioner_blocks(self) -> PETSc.Mat | None:
         """The model's ``preconditioner`` blocks (e.g. the fixed-stress term),
@@ -253,9 +265,7 @@ class Problem:
             model = Model(self.model.fields, [], terms)
             assemblers = [Assembler(self.disc, model, self.scales, region=r, inv_rscale=self.inv_rscale)
                           for r in sorted({j.region for j in terms})]
-            patterns = [a.coo_pattern() for a in assemblers]
-            mat = compat.coo_matrix(self.dm, np.concatenate([r for r, _ in patterns]),
-                                    np.concatenate([c for _, c in patterns]))
+            mat = compat.coo_matrix(self.dm, *self._coo_pattern(assemblers), copy=False)
             self._term_blocks[key] = (mat, assemblers)
         mat, assemblers = self._term_blocks[key]
         xl, xdl, t, shift = self._jacobian_point

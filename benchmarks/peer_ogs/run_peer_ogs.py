@@ -76,7 +76,7 @@ PETTHM_LAYER, PETTHM_LAYER_GROWTH = 0.05, 1.5
 PETTHM_WALL_LEVELS = {0: (3.0, 30.0, 0.2, 1.6, 0), 1: (2.0, 30.0, 0.1, 1.5, 1)}
 #: petthm with OGS's wall layers and PETSc's BDF2 (-ts_type bdf -ts_bdf_order 2: second order in
 #: time, so fewer, longer steps; "b" prefixed): as PETTHM_WALL_LEVELS
-PETTHM_BDF2_LEVELS = {0: (3.0, 30.0, 0.2, 1.6, 4), 1: (2.0, 30.0, 0.1, 1.5, 5)}
+PETTHM_BDF2_LEVELS = {0: (4.0, 30.0, 0.3, 1.6, 4), 1: (2.0, 30.0, 0.1, 1.5, 5)}
 
 
 def width(t_end: float) -> float:
