@@ -189,6 +189,9 @@ class RunParams:
                             "largest step), or from an estimate of backward Euler's local error "
                             "(PETSc's TS adaptivity: -ts_adapt_*, tolerance -ts_atol on the scaled "
                             "unknowns, default 1e-3 of each field's range)", choices=("schedule", "error"))
+    dt_courant: float = param(0.0, "cells", "also limit each next step so that a temperature front "
+                              "(fracture Tf; rock Tm where water flows through it) moves at most this "
+                              "many cells per step, from the last step's change (0: no limit)", lo=0.0)
     output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0)
     quiet: bool = param(False, "-", "no per-step progress line")
     max_cells: int = param(5_000_000, "cells", "refuse a generated mesh that would have more cells "

@@ -1,0 +1,58 @@
+"""The Courant number of a temperature front over one time step (the
+``-thm_dt_courant`` limit, physics.md section 10): how many cells the front
+of an advected temperature moved in the step.
+
+An isotherm moves at |dT/dt| / |grad T|; over a step of length dt through a
+cell of size h that is |Delta T| / (|grad T| h) cells.  Per cell of the
+field's region: the largest nodal change |Delta T| of the step and the
+temperature difference across the cell |grad T| h (largest over its
+quadrature points), both as fractions of the field's range (its scale).
+Only cells that hold a front count (a difference across the cell of at
+least ``FRONT`` of the range): elsewhere the ratio measures nothing.  The
+fields are the fracture temperature and the rock temperature where water
+flows through the rock (an advected front); a conduction front in
+impermeable rock is not limited (its thin wall cells would stall the steps).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import probes
+from .context import CellContext
+
+#: a cell holds a front when the temperature across it differs by this fraction of the range
+FRONT = 0.02
+
+
+def advected_temperatures(model) -> list[str]:
+    """The temperature fields whose fronts are advected: Tf, and Tm with a matrix flow."""
+    out = ["Tf"] if model.has("Tf") else []
+    if model.has("Tm") and model.has("pm"):
+        out.append("Tm")
+    return out
+
+
+def front_courant(problem, X_old, X_new, t: float) -> float:
+    """Largest number of cells any advected temperature front moved in the
+    step from ``X_old`` to ``X_new`` (0 where no cell holds a front; the same
+    on every rank)."""
+    xl_old = problem.local_arrays(X_old, t)[0].copy()
+    xl_new = problem.local_arrays(X_new, t)[0]
+    worst = 0.0
+    for name in advected_temperatures(problem.model):
+        worst = max(worst, _cells_moved(problem, name, xl_old, xl_new, t))
+    return probes.global_max(problem.dm.comm, [worst], empty=0.0)
+
+
+def _cells_moved(problem, name: str, xl_old, xl_new, t: float) -> float:
+    domain = problem.disc.field(name).region
+    asm = problem.region(min(r for r in problem.assemblers if r.domain == domain))   # Gauss before lumped
+    n = asm.mesh.ncells
+    if n == 0:
+        return 0.0
+    dofs = asm.dofs(name)
+    change = np.abs(xl_new[dofs] - xl_old[dofs]).max(axis=1)                 # scaled: fraction of range
+    grad = CellContext(asm, slice(0, n), xl_new, xl_new, t).grad(name)[:, :, 0, :]
+    across = np.linalg.norm(grad, axis=-1).max(axis=1) * asm.mesh.h / problem.scales[name].scale
+    front = across >= FRONT
+    return float(np.max(change[front] / across[front])) if front.any() else 0.0
