@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import probes
+from .assembly import CHUNK
 from .context import CellContext
 
 #: a cell holds a front when the temperature across it differs by this fraction of the range
@@ -50,9 +51,14 @@ def _cells_moved(problem, name: str, xl_old, xl_new, t: float) -> float:
     n = asm.mesh.ncells
     if n == 0:
         return 0.0
-    dofs = asm.dofs(name)
-    change = np.abs(xl_new[dofs] - xl_old[dofs]).max(axis=1)                 # scaled: fraction of range
-    grad = CellContext(asm, slice(0, n), xl_new, xl_new, t).grad(name)[:, :, 0, :]
-    across = np.linalg.norm(grad, axis=-1).max(axis=1) * asm.mesh.h / problem.scales[name].scale
-    front = across >= FRONT
-    return float(np.max(change[front] / across[front])) if front.any() else 0.0
+    worst = 0.0
+    for s in range(0, n, CHUNK):                                             # bounded memory (P2, 3D)
+        cells = slice(s, min(n, s + CHUNK))
+        dofs = asm.dofs(name)[cells]
+        change = np.abs(xl_new[dofs] - xl_old[dofs]).max(axis=1)             # scaled: fraction of range
+        grad = CellContext(asm, cells, xl_new, xl_new, t).grad(name)[:, :, 0, :]
+        across = np.linalg.norm(grad, axis=-1).max(axis=1) * asm.mesh.h[cells] / problem.scales[name].scale
+        front = across >= FRONT
+        if front.any():
+            worst = max(worst, float(np.max(change[front] / across[front])))
+    return worst
