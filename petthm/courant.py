@@ -45,6 +45,32 @@ def front_courant(problem, X_old, X_new, t: float) -> float:
     return probes.global_max(problem.dm.comm, [worst], empty=0.0)
 
 
+class FrontStepLimit:
+    """The ``-thm_dt_courant`` cap on the next step (``solver.TimeStepper``
+    calls it after each accepted step): ``dt`` cut so that the fronts would
+    move at most ``courant`` cells at the speed they had in the step just
+    taken; it keeps the last accepted state for the next estimate."""
+
+    def __init__(self, problem, courant: float):
+        self.problem, self.courant, self.X_prev = problem, courant, None
+
+    def start(self, X) -> None:
+        """The state before the first step."""
+        if self.courant > 0.0 and self.X_prev is None:
+            self.X_prev = X.copy()
+
+    def __call__(self, ts, dt: float) -> float:
+        if self.courant <= 0.0:
+            return dt
+        X = ts.getSolution()
+        if self.X_prev is None:
+            self.X_prev, moved = X.duplicate(), 0.0
+        else:
+            moved = front_courant(self.problem, self.X_prev, X, ts.getTime())
+        X.copy(self.X_prev)
+        return min(dt, ts.getTimeStep() * self.courant / moved) if moved > self.courant else dt
+
+
 def _cells_moved(problem, name: str, xl_old, xl_new, t: float) -> float:
     domain = problem.disc.field(name).region
     asm = problem.region(min(r for r in problem.assemblers if r.domain == domain))   # Gauss before lumped

@@ -21,7 +21,7 @@ from petsc4py import PETSc
 from . import compat, fieldsplit
 from .errors import InputError
 from .fieldsplit import VIFieldSplit  # noqa: F401  (-pc_python_type petthm.solver.VIFieldSplit)
-from .courant import front_courant
+from .courant import FrontStepLimit
 from .problem import Problem
 from .stepcontrol import RECOVERY, StepControl, error_control_defaults  # noqa: F401  (re-exported)
 
@@ -202,7 +202,7 @@ class TimeStepper:
         adaptive = PETSc.Options(ts.getOptionsPrefix()).getString("ts_adapt_type", "none") != "none"
         self._start_schedule(control, ts.getTimeStep(), adaptive)
         self._reported = None                    # (step, t) the user's monitor saw last
-        self._X_prev = None                      # the last accepted state (-thm_dt_courant)
+        self.front_limit = FrontStepLimit(problem, control.courant)
 
     def _start_schedule(self, control: StepControl, first_dt: float, adaptive: bool = False) -> None:
         """The step schedule's memory (``_post_step``), before the first step;
@@ -250,7 +250,7 @@ class TimeStepper:
             self._stop_now()
             return
         if self.adaptive:                      # the TS's error estimate chose the next step
-            self._land_on_hit_times(ts, t, self._courant_limited(ts, ts.getTimeStep()))
+            self._land_on_hit_times(ts, t, self.front_limit(ts, ts.getTimeStep()))
             return
         taken = ts.getTimeStep()
         cut = ts.getStepRejections() > self._rejections_seen       # rejected tries cut this step
@@ -266,25 +266,7 @@ class TimeStepper:
         if self._last_dt_cut is not None and not cut:    # resume the growth sequence after a hit
             dt = min(self._last_dt_cut, c.dt_max)
         self._last_dt_cut = None
-        self._land_on_hit_times(ts, t, self._courant_limited(ts, dt))
-
-    def _courant_limited(self, ts, dt: float) -> float:
-        """``dt``, cut so that the temperature fronts would move at most
-        ``-thm_dt_courant`` cells in the next step at the speed they had in
-        the step just taken (``courant.front_courant``); the state is kept
-        for the next step's estimate."""
-        c = self.control
-        if c.courant <= 0.0:
-            return dt
-        X = ts.getSolution()
-        if self._X_prev is None:
-            self._X_prev, moved = X.duplicate(), 0.0
-        else:
-            moved = front_courant(self.problem, self._X_prev, X, ts.getTime())
-        X.copy(self._X_prev)
-        if moved > c.courant:
-            dt = min(dt, ts.getTimeStep() * c.courant / moved)
-        return dt
+        self._land_on_hit_times(ts, t, self.front_limit(ts, dt))
 
     def _land_on_hit_times(self, ts, t: float, dt: float) -> None:
         """Propose the next step dt, cut to land on the next hit time (the step
@@ -361,8 +343,7 @@ class TimeStepper:
 
     def solve(self) -> int:
         """Run to the final time; returns TS converged reason (negative: failed)."""
-        if self.control.courant > 0.0 and self._X_prev is None:
-            self._X_prev = self.problem.X.copy()          # the state before the first step
+        self.front_limit.start(self.problem.X)
         self.ts.solve(self.problem.X)
         if self.error is not None:
             raise self.error
