@@ -202,7 +202,6 @@ class TimeStepper:
         adaptive = PETSc.Options(ts.getOptionsPrefix()).getString("ts_adapt_type", "none") != "none"
         self._start_schedule(control, ts.getTimeStep(), adaptive)
         self._reported = None                    # (step, t) the user's monitor saw last
-        self.front_limit = FrontStepLimit(problem, control.courant)
 
     def _start_schedule(self, control: StepControl, first_dt: float, adaptive: bool = False) -> None:
         """The step schedule's memory (``_post_step``), before the first step;
@@ -214,6 +213,7 @@ class TimeStepper:
         self._proposed = first_dt                # the step proposed for the step being taken
         self._recover_to = None                  # the schedule's step, while a cut step grows back
         self._rejections_seen = 0
+        self.front_limit = FrontStepLimit(getattr(self, "problem", None), control.courant)   # -thm_dt_courant
 
     def _set_field_splits(self, pc):
         """A field-split preconditioner gets one split per field, named by the
