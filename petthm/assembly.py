@@ -210,15 +210,22 @@ class Assembler:
 
     def _build_pattern(self):
         """The number of COO entries of ``jacobian_values``'s order (chunk by
-        chunk, every block of a chunk, then the facet terms).  Constrained
-        rows and columns keep their entries, with negative indices, which
-        PETSc's COO assembly ignores (no mask to apply at every assembly);
-        the pattern itself is made again when a matrix is created
-        (``coo_pattern``) and not kept: it is 8 bytes per entry."""
-        self.nnz = int(sum(r.size for r, _ in self._pattern_parts()))
+        chunk, every block of a chunk, then the facet terms), from the dof
+        tables' shapes.  Constrained rows and columns keep their entries, with
+        negative indices, which PETSc's COO assembly ignores (no mask to
+        apply at every assembly); the pattern itself is made when a matrix is
+        created (``coo_pattern``) and not kept: it is 8 bytes per entry."""
+        n = self.mesh.ncells
+        self.nnz = sum(self._entries(jb.test, jb.trial, n) for jb in self.model.jacobians)
+        self.nnz += sum(self._entries(ft.field, ft.field, len(fb.cells)) for ft in self.model.facets
+                        if ft.g0 is not None for fb in self._facets[ft.boundary])
+
+    def _entries(self, test, trial, ncells: int) -> int:
+        """Number of COO entries of one term on ``ncells`` cells."""
+        return int(ncells) * self.dofs(test).shape[1] * self.dofs(trial).shape[1]
 
     def _pattern_parts(self):
-        for cells in self._chunks():
+        for cells in self.chunks():
             for jb in self.model.jacobians:
                 yield self._block_index(jb.test, jb.trial, cells)
         for ft in self.model.facets:
@@ -243,7 +250,9 @@ class Assembler:
         return rows, cols
 
     # -- residual -------------------------------------------------------------
-    def _chunks(self):
+    def chunks(self):
+        """The region's cells in batches of ``CHUNK`` (slices): bounded memory
+        for the per-point arrays of P2 in 3D."""
         n = self.mesh.ncells
         for s in range(0, n, CHUNK):
             yield slice(s, min(n, s + CHUNK))
@@ -253,7 +262,7 @@ class Assembler:
         derivative; ``shift``: 1/dt of the step (a kernel that needs the
         increment x - x_old = x_dot / shift, the friction law)."""
         out = np.zeros(self.disc.nlocal)
-        for cells in self._chunks():
+        for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)
             W = self.W[cells]
             nc = W.shape[0]
@@ -308,11 +317,11 @@ class Assembler:
             raise ValueError("keep_constant needs the buffer of an earlier assembly")
         out = np.empty(self.nnz) if out is None else out
         writer = _Writer(out)
-        for cells in self._chunks():
+        for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
             for jb in self.model.jacobians:
                 if keep_constant and jb.constant:
-                    writer.skip(self._block_size(jb, cells))
+                    writer.skip(self._entries(jb.test, jb.trial, cells.stop - cells.start))
                     continue
                 K = self._cell_block(jb, ctx, cells)
                 rowfac = self.inv_rscale[self.dofs(jb.test)[cells]] * self.scale(jb.trial).scale
@@ -328,12 +337,6 @@ class Assembler:
                 rowfac = self.inv_rscale[self.dofs(ft.field)[fb.cells]] * sc.scale
                 writer.put((K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel())
         return out
-
-    def _block_size(self, jb, cells: slice) -> int:
-        """Number of COO entries of one term on a batch of cells."""
-        fF, fG = self.disc.field(jb.test), self.disc.field(jb.trial)
-        nbF, nbG = self.tab(jb.test).phi.shape[1], self.tab(jb.trial).phi.shape[1]
-        return (cells.stop - cells.start) * nbF * fF.ncomp * nbG * fG.ncomp
 
     @staticmethod
     def _mass_like(g0w, phiF, phiG):
@@ -422,7 +425,7 @@ class Assembler:
     def integrate(self, xl, integrand: Callable, t: float = 0.0) -> float:
         """Global integral over this region of ``integrand(ctx)`` (nc, nq), SI."""
         acc = 0.0
-        for cells in self._chunks():
+        for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xl, t)
             acc += float(np.sum(self.W[cells] * np.broadcast_to(integrand(ctx), self.W[cells].shape)))
         return self.mesh.dm.comm.tompi4py().allreduce(acc)
@@ -435,7 +438,7 @@ class Assembler:
         tab = _Tab(m.rdim, f.degree, rule.points)
         sc = self.scale(name)
         acc = np.zeros(4)
-        for cells in self._chunks():
+        for cells in self.chunks():
             X = xl[self.dofs(name)[cells]].reshape(-1, tab.phi.shape[1], f.ncomp) * sc.scale + sc.offset
             x = m.x0[cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[cells], rule.points)
             W = np.abs(m.detJ[cells])[:, None] * rule.weights

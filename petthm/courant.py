@@ -18,7 +18,6 @@ from __future__ import annotations
 import numpy as np
 
 from . import probes
-from .assembly import CHUNK
 from .context import CellContext
 
 #: a cell holds a front when the temperature across it differs by this fraction of the range
@@ -74,12 +73,8 @@ class FrontStepLimit:
 def _cells_moved(problem, name: str, xl_old, xl_new, t: float) -> float:
     domain = problem.disc.field(name).region
     asm = problem.region(min(r for r in problem.assemblers if r.domain == domain))   # Gauss before lumped
-    n = asm.mesh.ncells
-    if n == 0:
-        return 0.0
     worst = 0.0
-    for s in range(0, n, CHUNK):                                             # bounded memory (P2, 3D)
-        cells = slice(s, min(n, s + CHUNK))
+    for cells in asm.chunks():
         dofs = asm.dofs(name)[cells]
         change = np.abs(xl_new[dofs] - xl_old[dofs]).max(axis=1)             # scaled: fraction of range
         grad = CellContext(asm, cells, xl_new, xl_new, t).grad(name)[:, :, 0, :]

@@ -140,6 +140,7 @@ class Discretisation:
         if self.global_index.size != self.nlocal:
             raise RuntimeError("local-to-global map does not match the local section")
         self._trace_cache = {}
+        self._node_coordinates: dict[str, np.ndarray] = {}     # field_node_coordinates, per field
         self.ties = []
         for f, g in self.ties_spec.items():
             self._tie(f, g, [b for b, _ in dirichlet.get(g, ())])
@@ -346,12 +347,11 @@ class Discretisation:
     def field_node_coordinates(self, name: str) -> np.ndarray:
         """Coordinates of the field's nodes (n, dim), computed once per field
         (read-only: monitors ask for them at every step)."""
-        cache = self.__dict__.setdefault("_node_coordinates", {})
-        if name not in cache:
+        if name not in self._node_coordinates:
             x = self.mesh.point_coordinates(self.node_points(name))
             x.flags.writeable = False
-            cache[name] = x
-        return cache[name]
+            self._node_coordinates[name] = x
+        return self._node_coordinates[name]
 
     def global_sizes(self) -> dict[str, int]:
         """Number of unknowns per field (global, constrained dofs excluded)."""

@@ -83,17 +83,14 @@ def point_value(problem, name: str, point, X=None, t: float = 0.0, component: in
     """SI value of a field's component at the node nearest to ``point`` (the
     node found once per field and point and kept on the problem: the mesh
     does not move; monitors ask at every step)."""
-    cache = problem.__dict__.setdefault("_probe_nodes", {})
     key = (name, tuple(float(v) for v in np.ravel(point)))
-    if key not in cache:
-        cache[key] = nearest_node(problem.dm.comm, problem.disc.field_node_coordinates(name), point)
-    owner, k = cache[key]
+    if key not in problem.probe_nodes:
+        problem.probe_nodes[key] = nearest_node(problem.dm.comm, problem.disc.field_node_coordinates(name),
+                                                point)
+    owner, k = problem.probe_nodes[key]
     c = mpi(problem.dm.comm)
-    xl, _ = problem.local_arrays(X or problem.X, t)             # collective (ghost update)
-    value = None
-    if c.rank == owner:
-        sc = problem.scales[name]
-        value = float(xl[problem.disc.field_local_dofs(name)[k, component]] * sc.scale + sc.offset)
+    v = problem.field_values(name, X, t, nodes=[k] if c.rank == owner else [])     # collective
+    value = float(v[0, component]) if c.rank == owner else None
     return c.bcast(value, root=owner)
 
 

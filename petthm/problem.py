@@ -61,6 +61,7 @@ class Problem:
         self._jvals: np.ndarray | None = None     # the Jacobian's COO values (reused buffer)
         self._jvals_constant = False              # it holds the constant terms' values (model.CellJacobian)
         self._residual_memo = None                # (t, shift, X, local residual) of the last ifunction
+        self.probe_nodes: dict = {}               # probes.point_value's (rank, node) per (field, point)
         self._ev_res = PETSc.Log.Event("thm.residual")
         self._ev_jac = PETSc.Log.Event("thm.jacobian")
 
@@ -101,11 +102,14 @@ class Problem:
             xl[dofs] = (vals.reshape(dofs.shape) - sc.offset) / sc.scale
         self.dm.localToGlobal(self._Xl, self.X, addv=PETSc.InsertMode.INSERT_VALUES)
 
-    def field_values(self, name: str, X: PETSc.Vec | None = None, t: float = 0.0):
-        """SI nodal values (n, ncomp) of a field on this rank's local nodes (ghosts included)."""
+    def field_values(self, name: str, X: PETSc.Vec | None = None, t: float = 0.0, nodes=None):
+        """SI nodal values (n, ncomp) of a field on this rank's local nodes
+        (ghosts included), or on the rows ``nodes`` of them (collective: the
+        ghost update; a rank without nodes passes an empty selection)."""
         xl, _ = self.local_arrays(X or self.X, t)
         sc = self.scales[name]
-        return xl[self.disc.field_local_dofs(name)] * sc.scale + sc.offset
+        dofs = self.disc.field_local_dofs(name)
+        return xl[dofs if nodes is None else dofs[nodes]] * sc.scale + sc.offset
 
     def variable_bounds(self) -> tuple[PETSc.Vec, PETSc.Vec]:
         """Global (scaled) lower and upper bounds of the unknowns from
