@@ -294,6 +294,42 @@ def layered_slab_with_fracture(path: str, extent: Sequence[float], width: float,
     return _write(gmsh, dim, path)
 
 
+def layered_box_with_segment(path: str, x_range: Sequence[float], half: float, segment: Sequence[float],
+                             size: float, fracture_size: float, layer: float, ratio: float,
+                             grading_distance: float) -> str:
+    """The box [x0, x1] x [-H, H] (``x_range``, H = ``half``) around the
+    fracture y = 0, s0 < x < s1 (``segment``, its tips inside the box),
+    meshed in layers: the line y = 0 is meshed at ``fracture_size`` on the
+    fracture, growing to ``size`` over ``grading_distance`` beyond it, then
+    extruded up and down in layers of thickness ``layer`` growing by
+    ``ratio`` (each quadrilateral cut into two triangles).  The 2D analogue
+    of ``layered_half_box_with_disc``: thin cells along the whole fracture
+    resolve the rock's thermal boundary layer, the cell count grows only with
+    the number of layers.  Physical groups as in ``box_with_fractures``."""
+    gmsh = _start("layered_segment")
+    occ = gmsh.model.occ
+    xs = (x_range[0], segment[0], segment[1], x_range[1])
+    pts = [occ.addPoint(x, 0.0, 0.0) for x in xs]
+    lines = [occ.addLine(pts[i], pts[i + 1]) for i in range(3)]
+    h = layer_heights(layer, ratio, half)
+    cum = list(np.cumsum(h) / half)
+    flipped = []
+    for sign in (1.0, -1.0):
+        out = occ.extrude([(1, t) for t in lines], 0.0, sign * half, 0.0, numElements=[1] * len(h),
+                          heights=cum, recombine=False)
+        if sign > 0:
+            flipped += [t for (d, t) in out if d == 2]
+    occ.synchronize()
+    for t in flipped:          # a line extruded toward +y gives clockwise triangles: turn them over
+        gmsh.model.mesh.setReverse(2, t)
+    on_outer = _tag_domain(gmsh, 2, [t for (_, t) in gmsh.model.getEntities(2)])
+    _tag_fracture(gmsh, 2, 0, [lines[1]], on_outer)
+    mf = gmsh.model.mesh.field
+    _background_size(gmsh, [_threshold(mf, "CurvesList", [lines[1]], fracture_size, size, grading_distance)])
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    return _write(gmsh, 2, path)
+
+
 def _embed_curves(gmsh, dim: int, curves: list, cells: list) -> None:
     """Embed each curve in the cell (volume) that contains it: the OCC
     fragment embeds a curve inside a volume by itself only when no surface

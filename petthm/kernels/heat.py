@@ -24,7 +24,9 @@ SUPG (Brooks & Hughes 1982) uses the residual of the conservative form,
 
     R = C Tdot + b . grad T + T div b - L lap T (- s),
 
-tau = ((2|b|/h_p)^2 + 9 (4 L/h_p^2)^2)^(-1/2), h_p = h/p, with div b taken
+tau = ((2|b|/h_p)^2 + 9 (4 L/h_p^2)^2)^(-1/2), h_p = h/p (h the longest
+edge; in the advective term, on rock cells, the cell's length along the
+streamline: ``advective_tau_term``), with div b taken
 from the mass balance of the flow that advects the heat (no second
 derivatives of p): div b = -rho_f C_f m, m = S pdot - B Tdot (+ alpha
 d(div u)/dt in a Biot rock) - s_p, the fluid stored less the flow's source.
@@ -147,10 +149,10 @@ class _HeatPoint:
                 self.b = h.fluid_rho_c * np.broadcast_to(h.velocity(ctx.x, ctx.t), ctx.shape + (d,))
                 self.m = np.zeros(ctx.shape)
             hp = ctx.h / h.degree
-            self.A = 4.0 / hp ** 2
             self.B1 = 144.0 / hp ** 4                                      # B0 = B1 L^2
-            bb = np.einsum("cqa,cqa->cq", self.b, self.b)
-            self.tau = 1.0 / np.sqrt(self.A * bb + self.B1 * self.L ** 2) if h.supg else np.zeros_like(bb)
+            self.adv, self.D = advective_tau_term(self.b, ctx, h.degree)
+            self.tau = (1.0 / np.sqrt(self.adv + self.B1 * self.L ** 2) if h.supg
+                        else np.zeros(self.b.shape[:2]))
             R = self.C * ctx.dot(T)[..., 0] + np.einsum("cqa,cqa->cq", self.b, self.gT)
             if h.degree > 1:
                 self.lapT = ctx.lap(T)[..., 0]
@@ -174,9 +176,34 @@ class _HeatPoint:
         """dZ_a/db_c of Z = tau R b: (nc, nq, a, c)."""
         tau, R, b = self.tau, self.R, self.b
         eye = np.eye(self.d)[None, None]
-        return (-(tau ** 3 * self.A * R)[..., None, None] * b[..., :, None] * b[..., None, :]
+        return (-(tau ** 3 * R)[..., None, None] * b[..., :, None] * self.D[..., None, :]
                 + tau[..., None, None] * b[..., :, None] * self.gT[..., None, :]
                 + (tau * R)[..., None, None] * eye)
+
+
+def advective_tau_term(b, ctx, degree: int):
+    """The advective part (2|b|/h_p)^2 of tau^-2 and its half-derivative
+    D = (1/2) d/db of it, (nc, nq) and (nc, nq, d).
+
+    Rock cells: h is the cell's length along the streamline (its longest
+    chord parallel to b), h_b = 2|b| / sum_a |b . grad lambda_a| with the
+    barycentric coordinates lambda_a (Tezduyar & Park 1986), so the term
+    is (p sum_a |b . grad lambda_a|)^2.  On the thin cells of a layered mesh
+    the longest edge overstates the length across the layers many times;
+    a tau that large made Newton diverge at any step length where the rock
+    water crosses the layers (Scene 1 with leakoff, docs/scene1.md).
+    Fracture faces keep h = their longest edge (their cells are isotropic;
+    on a line it is the same length)."""
+    bb = np.einsum("cqa,cqa->cq", b, b)
+    G = ctx.Jinv                                                   # rows: grad lambda_1..d
+    if G.shape[1] != G.shape[2]:
+        A = 4.0 / (ctx.h / degree) ** 2
+        return A * bb, A[..., None] * b
+    grads = np.concatenate([-G.sum(axis=1, keepdims=True), G], axis=1)           # (nc, d+1, d)
+    proj = np.einsum("cqa,cka->cqk", b, grads)
+    S = np.abs(proj).sum(axis=2)
+    D = degree ** 2 * S[..., None] * np.einsum("cqk,cka->cqa", np.sign(proj), grads)
+    return (degree * S) ** 2, D
 
 
 def heat_point(h: Heat, ctx) -> _HeatPoint:
@@ -329,7 +356,7 @@ def heat_s1_aperture(h: Heat, ctx):
                 if fl.T is not None and fl.thermal_storage:
                     m1 = m1 - fl.thermal_storage * ctx.dot(fl.T)[..., 0]
                 dR = dR - h.fluid_rho_c * hp.Tv * m1
-            dtau = -hp.tau ** 3 * (hp.A * np.einsum("cqa,cqa->cq", hp.b, db) + hp.B1 * hp.L * h.conductivity)
+            dtau = -hp.tau ** 3 * (np.einsum("cqa,cqa->cq", hp.D, db) + hp.B1 * hp.L * h.conductivity)
             s = s + (dtau * hp.R + hp.tau * dR)[..., None] * hp.b + (hp.tau * hp.R)[..., None] * db
     return s
 

@@ -41,6 +41,12 @@ class Scene1Params:
     scene1_margin: float = param(150.0, "m", "rock beyond the fracture in every direction", lo=0.0,
                                  lo_open=True)
     scene1_fracture_size: float = param(1.0, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+    scene1_layer: float = param(0.0, "m", "first rock layer on each side of the fracture of a layered mesh "
+                                "(the line through the fracture extruded in layers growing by "
+                                "-thm_scene1_layer_growth; ~0.5 sqrt(kappa t) resolves the rock's thermal "
+                                "layer from time t on: 0.05 m from 1e4 s); 0: a graded unstructured mesh",
+                                lo=0.0)
+    scene1_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
 
 
 class _Scene1Monitor(Monitor):
@@ -106,6 +112,10 @@ class RigidFracture(Scene):
     def generate_mesh(self, path, size):
         p = self.p
         L, M = p.scene1_length, p.scene1_margin
+        if p.scene1_layer:
+            return meshing.layered_box_with_segment(path, (-M, L + M), M, (0.0, L), size,
+                                                    p.scene1_fracture_size, p.scene1_layer,
+                                                    p.scene1_layer_growth, 0.5 * M)
         fr = [meshing.Fracture("segment", p0=(0.0, 0.0), p1=(L, 0.0), size=p.scene1_fracture_size)]
         return meshing.box_with_fractures(path, [L + 2 * M, 2 * M], size, fr, grading_distance=0.5 * M,
                                           origin=(-M, -M))
