@@ -397,17 +397,13 @@ class PreconditionerReuse:
     * with ``max_krylov`` > 0, when the last linear solve needed more
       iterations than that;
 
-    and always when a linear solve failed, and at every Newton iteration of
-    a step tried again after a failed one (where the Jacobian changes by
-    O(1) within a step, mu(T) behind a cold front, a factorisation reused
-    from the first iteration failed the second one at every shorter try:
-    Scene 1 on a layered mesh).  The VI Newton method RSLS rebuilds it
-    anyway when the active set changes."""
+    and always when a linear solve failed or a step is tried again after a
+    failed solve.  The VI Newton method RSLS rebuilds it anyway when the
+    active set changes."""
 
     def __init__(self, ts: PETSc.TS, max_krylov: int = 0):
         self.ts, self.max_krylov = ts, max_krylov
         self.step_start = None
-        self.retrying = False                   # the step is tried again after a failure
         self.rebuilds = 0
         self._setups = PETSc.Log.Event("PCSetUp")
         self._solves = PETSc.Log.Event("KSPSolve")
@@ -444,9 +440,8 @@ class PreconditionerReuse:
         rebuild = ksp.getConvergedReason() < 0 or self._costly(its, seconds)
         if it == 0:
             t = self.ts.getTime()
-            self.retrying = t == self.step_start             # the same step again: it failed
+            rebuild = rebuild or t == self.step_start        # the same step again: its solve failed
             self.step_start = t
-        rebuild = rebuild or self.retrying
         # the set-up is collective: every rank decides as the one that wants it most
         # (each measures its own times)
         rebuild = snes.comm.tompi4py().allreduce(bool(rebuild), op=_mpi_lor())
