@@ -188,10 +188,13 @@ def advective_tau_term(b, ctx, degree: int):
     Rock cells: h is the cell's length along the streamline (its longest
     chord parallel to b), h_b = 2|b| / sum_a |b . grad lambda_a| with the
     barycentric coordinates lambda_a (Tezduyar & Park 1986), so the term
-    is (p sum_a |b . grad lambda_a|)^2.  On the thin cells of a layered mesh
-    the longest edge overstates the length across the layers many times;
-    a tau that large made Newton diverge at any step length where the rock
-    water crosses the layers (Scene 1 with leakoff, docs/scene1.md).
+    is (p sum_a |b . grad lambda_a|)^2.  It keeps tau |b| / h_b <= 1/2: the
+    SUPG capacity term tau C Tdot b . grad w stays below the Galerkin one
+    (a larger tau makes the capacity matrix indefinite, and a shorter step
+    does not help).  On the thin cells of a layered mesh the longest edge
+    overstates the length across the layers 20-40 times: Newton diverged
+    at every step length tried where the rock's water crosses the layers
+    (Scene 1 with leakoff, docs/scene1.md), and twice h_b still did.
     Fracture faces keep h = their longest edge (their cells are isotropic;
     on a line it is the same length)."""
     bb = np.einsum("cqa,cqa->cq", b, b)
