@@ -375,9 +375,17 @@ def kept_convergence_section(doc: str) -> list[str]:
     if start is None:
         return []
     end = text.index("## Stiff and extreme cases") if "## Stiff and extreme cases" in text else len(text)
-    origin = written.split(").", 1)[0].replace("Written by", "Kept from the report written by") + ")"
-    return [text[start], "", f"({origin}; `--stability-only` ran the stiff and extreme cases alone.)",
-            *text[start + 1:end]]
+    body = text[start + 1:end]
+    kept = [ln for ln in body if ln.startswith("(Kept from")]      # the section was kept before: its origin
+    if kept:
+        note = kept[0]
+    else:
+        origin = written.split(").", 1)[0].replace("Written by", "Kept from the report written by") + ")"
+        note = f"({origin}; `--stability-only` ran the stiff and extreme cases alone.)"
+    body = [ln for ln in body if not ln.startswith("(Kept from")]
+    while body and not body[0].strip():
+        body = body[1:]
+    return [text[start], "", note, "", *body]
 
 
 def main() -> int:
