@@ -281,10 +281,10 @@ def layered_slab_with_fracture(path: str, extent: Sequence[float], width: float,
     for sign in (1.0, -1.0):
         out = occ.extrude([(dim - 1, base)], *(sign * width * c for c in shift), numElements=[1] * len(h),
                           heights=cum, recombine=False)
-        if sign < 0:
+        if sign > 0:
             flipped += [t for (d, t) in out if d == dim]
     occ.synchronize()
-    if dim == 2:             # a line extruded toward -y gives clockwise triangles: turn them over
+    if dim == 2:             # a line extruded toward +y gives clockwise triangles: turn them over
         for t in flipped:
             gmsh.model.mesh.setReverse(2, t)
     on_outer = _tag_domain(gmsh, dim, [t for (_, t) in gmsh.model.getEntities(dim)])

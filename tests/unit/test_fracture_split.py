@@ -154,3 +154,21 @@ def test_layered_box_with_segment(tmp_path):
     assert nt == 2 and after["shared_tip_pairs"] > 0
     assert after["orientation_errors"] == 0 and after["plex_checks_failed"] == 0
     assert after["pair_mismatch"] == 0.0
+
+
+def test_layered_slab_with_fracture(tmp_path):
+    """lauwerier's 2D layered mesh: the cells tile the slab, all
+    counter-clockwise (both halves were clockwise before stop 26); the split
+    passes its checks with the fracture cutting the slab (no tip)."""
+    import meshio
+    path = M.layered_slab_with_fracture(str(tmp_path / "slab.msh"), (3.0,), 1.0, 0.1, 0.01, 1.5)
+    m = meshio.read(path)
+    x, tri = m.points[:, :2], m.cells_dict["triangle"]
+    e1, e2 = x[tri[:, 1]] - x[tri[:, 0]], x[tri[:, 2]] - x[tri[:, 0]]
+    area = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    assert area.min() > 0 and abs(area.sum() - 6.0) < 1e-9
+    s = _stats(path, 1)
+    after = s["serial"]
+    assert after["cohesive_cells"] == sum(s["before"]["facets"].values()) == 30
+    assert after["orientation_errors"] == 0 and after["plex_checks_failed"] == 0
+    assert after["pair_mismatch"] == 0.0
