@@ -203,6 +203,27 @@ def layer_heights(first: float, ratio: float, total: float) -> np.ndarray:
     return h * (total / h.sum())
 
 
+def _extrude_in_layers(gmsh, ents: list, direction: Sequence[float], total: float, layer: float,
+                       ratio: float) -> list:
+    """Extrude the entities ``ents`` ((dim, tag)) to both sides along the unit
+    ``direction`` over ``total`` in layers of thickness ``layer`` growing by
+    ``ratio`` (``layer_heights``; simplices, not recombined).  Returns the
+    tags of the cells made on the + side: in 2D a line extruded along +y
+    gives clockwise triangles, which the caller turns over."""
+    occ = gmsh.model.occ
+    h = layer_heights(layer, ratio, total)
+    cum = list(np.cumsum(h) / total)
+    dim = ents[0][0] + 1
+    plus = []
+    for sign in (1.0, -1.0):
+        out = occ.extrude(ents, *(sign * total * c for c in direction), numElements=[1] * len(h),
+                          heights=cum, recombine=False)
+        if sign > 0:
+            plus += [t for (d, t) in out if d == dim]
+    occ.synchronize()
+    return plus
+
+
 def layered_half_box_with_disc(path: str, half: float, radius: float, size: float, disc_size: float,
                                layer: float, ratio: float, wells: Sequence[tuple] = (),
                                well_size: float = 0.0) -> str:
@@ -231,12 +252,7 @@ def layered_half_box_with_disc(path: str, half: float, radius: float, size: floa
                 plane.append(t)
     occ.synchronize()
     on_disc = [t for t in plane if np.hypot(*occ.getCenterOfMass(2, t)[:2]) < radius]
-    h = layer_heights(layer, ratio, half)
-    cum = list(np.cumsum(h) / half)
-    for dz in (half, -half):
-        occ.extrude([(2, t) for t in plane], 0.0, 0.0, dz, numElements=[1] * len(h), heights=cum,
-                    recombine=False)
-    occ.synchronize()
+    _extrude_in_layers(gmsh, [(2, t) for t in plane], (0.0, 0.0, 1.0), half, layer, ratio)
     on_outer = _tag_domain(gmsh, 3, [t for (_, t) in gmsh.model.getEntities(3)])
     _tag_fracture(gmsh, 3, 0, on_disc, on_outer)
     points = [(t, np.array(gmsh.model.getValue(0, t, []))) for (_, t) in gmsh.model.getEntities(0)]
@@ -275,17 +291,9 @@ def layered_slab_with_fracture(path: str, extent: Sequence[float], width: float,
     else:
         base = occ.addRectangle(0.0, 0.0, width, extent[0], extent[1])
         shift = (0.0, 0.0, 1.0)
-    h = layer_heights(layer, ratio, width)
-    cum = list(np.cumsum(h) / width)
-    flipped = []
-    for sign in (1.0, -1.0):
-        out = occ.extrude([(dim - 1, base)], *(sign * width * c for c in shift), numElements=[1] * len(h),
-                          heights=cum, recombine=False)
-        if sign > 0:
-            flipped += [t for (d, t) in out if d == dim]
-    occ.synchronize()
+    plus = _extrude_in_layers(gmsh, [(dim - 1, base)], shift, width, layer, ratio)
     if dim == 2:             # a line extruded toward +y gives clockwise triangles: turn them over
-        for t in flipped:
+        for t in plus:
             gmsh.model.mesh.setReverse(2, t)
     on_outer = _tag_domain(gmsh, dim, [t for (_, t) in gmsh.model.getEntities(dim)])
     _tag_fracture(gmsh, dim, 0, [base], on_outer)
@@ -311,17 +319,8 @@ def layered_box_with_segment(path: str, x_range: Sequence[float], half: float, s
     xs = (x_range[0], segment[0], segment[1], x_range[1])
     pts = [occ.addPoint(x, 0.0, 0.0) for x in xs]
     lines = [occ.addLine(pts[i], pts[i + 1]) for i in range(3)]
-    h = layer_heights(layer, ratio, half)
-    cum = list(np.cumsum(h) / half)
-    flipped = []
-    for sign in (1.0, -1.0):
-        out = occ.extrude([(1, t) for t in lines], 0.0, sign * half, 0.0, numElements=[1] * len(h),
-                          heights=cum, recombine=False)
-        if sign > 0:
-            flipped += [t for (d, t) in out if d == 2]
-    occ.synchronize()
-    for t in flipped:          # a line extruded toward +y gives clockwise triangles: turn them over
-        gmsh.model.mesh.setReverse(2, t)
+    for t in _extrude_in_layers(gmsh, [(1, t) for t in lines], (0.0, 1.0, 0.0), half, layer, ratio):
+        gmsh.model.mesh.setReverse(2, t)          # clockwise triangles above the line: turn them over
     on_outer = _tag_domain(gmsh, 2, [t for (_, t) in gmsh.model.getEntities(2)])
     _tag_fracture(gmsh, 2, 0, [lines[1]], on_outer)
     mf = gmsh.model.mesh.field

@@ -197,11 +197,10 @@ def advective_tau_term(b, ctx, degree: int):
     (Scene 1 with leakoff, docs/scene1.md), and twice h_b still did.
     Fracture faces keep h = their longest edge (their cells are isotropic;
     on a line it is the same length)."""
-    bb = np.einsum("cqa,cqa->cq", b, b)
     G = ctx.Jinv                                                   # rows: grad lambda_1..d
     if G.shape[1] != G.shape[2]:
         A = 4.0 / (ctx.h / degree) ** 2
-        return A * bb, A[..., None] * b
+        return A * np.einsum("cqa,cqa->cq", b, b), A[..., None] * b
     grads = np.concatenate([-G.sum(axis=1, keepdims=True), G], axis=1)           # (nc, d+1, d)
     proj = np.einsum("cqa,cka->cqk", b, grads)
     S = np.abs(proj).sum(axis=2)
