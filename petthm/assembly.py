@@ -33,7 +33,7 @@ import numpy as np
 
 from . import compat, fe
 from .context import CellContext, FacetContext, physical_gradient
-from .fields import Discretisation, FieldRef
+from .fields import Adjacent, Discretisation, FieldRef
 from .model import MATRIX, Model, Region
 
 CHUNK = 16384
@@ -175,6 +175,15 @@ class Assembler:
             B = physical_gradient(dphi.T[None, None], self.mesh.Jinv)                  # (ncells, 1, nb, d)
             self._basis_gradients[key] = np.ascontiguousarray(B[:, 0])
         return self._basis_gradients[key][cells]
+
+    def adjacent_gradients(self, ref: Adjacent, cells) -> np.ndarray:
+        """Physical gradients of the basis of the rock cell next to each
+        fracture face (an ``Adjacent`` field) at this region's quadrature
+        points, (nc, nq, nb, d); computed once (the geometry is fixed)."""
+        if ref not in self._basis_gradients:
+            self._basis_gradients[ref] = self.mesh.adjacent_gradients(ref.side, self.disc.field(ref).degree,
+                                                                      self.rule.points)
+        return self._basis_gradients[ref][cells]
 
     def basis_laplacian(self, name, cells) -> np.ndarray:
         """Laplacian of every basis function on each cell, (nc, nb)."""
@@ -377,7 +386,24 @@ class Assembler:
         const = raw.ndim == 2 + len(tail) and raw.shape[1] == 1
         return np.broadcast_to(raw, (nc, 1 if const else nq) + tail), const
 
+    def _adjacent_block(self, jb, ctx, cells):
+        """K_ij = sum_q W grad phi_i . g3 . grad psi_j with psi the basis of the
+        rock cell next to each fracture face (an ``Adjacent`` trial field, one
+        component): (nc, nbF, nbG)."""
+        W = self.W[cells]
+        (nc, nq), d = W.shape, self.mesh.dim
+        G = self.adjacent_gradients(jb.trial, cells)                       # (nc, nq or 1, nbG, d)
+        G = np.broadcast_to(G, (nc, nq) + G.shape[2:])
+        tab = self.tab(jb.test)
+        gw = physical_gradient(tab.dphi.transpose(0, 2, 1)[None], ctx.Jinv)  # (nc, nq, nbF, d)
+        g = np.broadcast_to(jb.g3(ctx), (nc, nq, 1, d, 1, d))[:, :, 0, :, 0, :]
+        T = np.einsum("cqab,cqjb->cqaj", g, G).reshape(nc, nq * d, -1)
+        U = (W[:, :, None, None] * gw).transpose(0, 2, 1, 3).reshape(nc, -1, nq * d)
+        return U @ T
+
     def _cell_block(self, jb, ctx, cells):
+        if isinstance(jb.trial, Adjacent):
+            return self._adjacent_block(jb, ctx, cells)
         fF, fG = self.disc.field(jb.test), self.disc.field(jb.trial)
         ref = self._reference_tensors(self.basis(jb.test), self.basis(jb.trial))
         Jinv, JinvT = ctx.Jinv, np.swapaxes(ctx.Jinv, 1, 2)

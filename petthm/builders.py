@@ -27,6 +27,7 @@ term is one kernel (``petthm/kernels``) and one builder here.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Callable, Optional
 
 import numpy as np
@@ -38,6 +39,7 @@ from .kernels import poroelastic as pe
 from .kernels import flow as fk
 from .kernels import friction as fr
 from .kernels import heat as hk
+from .kernels.wallflux import WallConduction
 from .materials import NUSSELT
 from .model import FRACTURE, FRACTURE_DUAL, Domain, Model, PointTerm, traces
 
@@ -221,18 +223,32 @@ class ModelBuilder:
                     self.flows[Domain.FRACTURE], degree=degree, supg=supg, aperture=self.aperture,
                     source=source)
         self.model.add_field(FieldSpec("Tf", 1, degree, Domain.FRACTURE))
-        self.model.add(hk.heat_terms(h))
-        self.heats[Domain.FRACTURE] = h
+        if hw is not None:
+            self.model.add(hk.heat_terms(h))
+        self.heats[Domain.FRACTURE] = h          # tied: its terms in build(), with the rock's wall flux
         return h
 
     def wells(self, terms: list[PointTerm]) -> None:
         self.model.points.extend(terms)
+
+    def _tied_fracture_heat(self) -> None:
+        """The terms of the fracture heat tied to the rock (equilibrium exchange);
+        with -thm_fracture_supg_wall_conduction its SUPG residual carries the
+        rock's wall conduction (kernels/wallflux.py)."""
+        h = self.heats[Domain.FRACTURE]
+        rock = self.heats.get(Domain.MATRIX)
+        if rock is not None and h.supg and h.advects and self.p.fracture_supg_wall_conduction:
+            h = replace(h, wall=WallConduction(rock.T, rock.conductivity))
+            self.heats[Domain.FRACTURE] = h
+        self.model.add(hk.heat_terms(h))
 
     # -- the model ------------------------------------------------------------------------
     def build(self) -> Model:
         """The model, with the couplings of pairs of builders added and the
         fields in the canonical order."""
         m = self.model
+        if m.ties.get("Tm") == "Tf":
+            self._tied_fracture_heat()
         # a scene whose model has u and Tm declares -thm_thermomechanical_heating
         if self.elastic is not None and m.has("Tm") and self.p.thermomechanical_heating:
             porous = m.has("pm")

@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
+from .fields import Adjacent
+
 if TYPE_CHECKING:
     from .assembly import Assembler
 
@@ -120,7 +122,10 @@ class CellContext:
         return self._cache[key]
 
     def _gradient(self, name, X):
-        """Physical gradient of the field with nodal values X (nc, nb, m)."""
+        """Physical gradient of the field with nodal values X (nc, nb, m); of
+        an ``Adjacent`` field: in the rock cell next to each fracture face."""
+        if isinstance(name, Adjacent):
+            return np.einsum("cqja,cjm->cqma", self._asm.adjacent_gradients(name, self._cells), X)
         tab = self._asm.tab(name)
         if tab.constant_grad:          # one point per cell: sum_i X_i grad phi_i
             B = self._asm.basis_gradients(name, self._cells)                 # (nc, nb, d)

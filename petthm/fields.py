@@ -54,13 +54,26 @@ def traces(name: str) -> tuple[Trace, Trace]:
     return Trace(name, Side.MINUS), Trace(name, Side.PLUS)
 
 
-#: a field name, or the trace of a matrix field on a fracture face
-FieldRef = Union[str, Trace]
+@dataclass(frozen=True)
+class Adjacent:
+    """A matrix field in the rock cell next to each fracture face on one
+    side, seen at the fracture's quadrature points (its gradient there: the
+    wall conduction of the fracture heat's SUPG residual, kernels/wallflux.py)."""
+    field: str
+    side: Side
+
+    def __str__(self) -> str:
+        return self.field + self.side.value + "(cell)"
+
+
+#: a field name, the trace of a matrix field on a fracture face, or a matrix
+#: field in the rock cell next to a fracture face
+FieldRef = Union[str, Trace, Adjacent]
 
 
 def base_field(ref: FieldRef) -> str:
     """The field of a field reference."""
-    return ref.field if isinstance(ref, Trace) else ref
+    return ref.field if isinstance(ref, (Trace, Adjacent)) else ref
 
 
 @dataclass(frozen=True)
@@ -310,7 +323,10 @@ class Discretisation:
     def region_dofs(self, region: Domain, name: FieldRef) -> np.ndarray:
         """Element dofs of a field on a domain's elements: the field's own
         elements, or on the fracture a ``Trace`` of a matrix field on the -
-        face or on the paired + face, nodes in the - face's order."""
+        face or on the paired + face, nodes in the - face's order, or an
+        ``Adjacent`` matrix field: the dofs of the rock cell next to each face."""
+        if isinstance(name, Adjacent):
+            return self.elem_dofs[name.field][self.regions[region].adjacent_cells(name.side)]
         if not isinstance(name, Trace):
             if region is not self.field(name).region:
                 raise ValueError(f"field {name} does not live on the {region} (use a Trace)")

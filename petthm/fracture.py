@@ -347,6 +347,7 @@ class FractureSurface:
                                         mesh.edge_vertices, mesh.estart) if len(self.faces) else \
             np.zeros_like(self.cell_edges)
         self.normals = self._unit_normals()
+        self._adjacent = {}
 
     def _paired_plus_vertices(self, topo) -> np.ndarray:
         """Vertices of each + face in the order of the - face's vertices (paired
@@ -379,6 +380,40 @@ class FractureSurface:
             lead[big] = n[big, k]
         n[lead < 0] *= -1
         return n
+
+    def adjacent_cells(self, side) -> np.ndarray:
+        """The rock cell next to each face on ``side`` (a ``fields.Side``), as
+        an index among the mesh's cells.  ``mesh.distribute`` keeps every
+        cohesive cell on the rank of its two rock cells."""
+        key = side.value
+        if key not in self._adjacent:
+            faces = self.faces if side.sign < 0 else self.plus_faces
+            cs, ce = self.mesh.cstart, self.mesh.cend
+            out = np.full(len(faces), -1, dtype=compat.INT)
+            for i, f in enumerate(faces):            # set-up only: one support query per face
+                rock = [c for c in self.dm.getSupport(int(f)) if cs <= c < ce]
+                if rock:
+                    out[i] = rock[0] - cs
+            if (out < 0).any():
+                raise RuntimeError(f"{int((out < 0).sum())} fracture faces have no local rock cell "
+                                   f"on their {side.value} side (the partition split them)")
+            self._adjacent[key] = out
+        return self._adjacent[key]
+
+    def adjacent_gradients(self, side, degree: int, points: np.ndarray) -> np.ndarray:
+        """Physical gradients of the basis (``degree``) of the rock cell next to
+        each face on ``side``, at the face's quadrature points (reference
+        ``points`` of the face, (nq, rdim)): (nfaces, nq, nb, dim); nq = 1 for
+        P1 (constant over the cell)."""
+        from . import fe
+        m, rc = self.mesh, self.adjacent_cells(side)
+        if degree == 1:
+            points = points[:1]
+        x = self.x0[:, None, :] + np.einsum("cak,qk->cqa", self.J, points)
+        xi = np.einsum("cka,cqa->cqk", m.Jinv[rc], x - m.x0[rc][:, None, :])     # in the rock cell
+        nc, nq = x.shape[:2]
+        dphi = fe.tabulate(self.dim, degree, xi.reshape(-1, self.dim)).dphi.reshape(nc, nq, -1, self.dim)
+        return np.einsum("cqjk,cka->cqja", dphi, m.Jinv[rc])
 
     @property
     def ncells(self) -> int:

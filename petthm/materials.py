@@ -168,6 +168,11 @@ DECLARED = {
     "fracture_cohesion": param(0.0, "Pa", "cohesion c0 of the Coulomb law |tau| <= c0 + mu_f lam", lo=0.0),
     "fracture_heat_exchange": param("equilibrium", "-", "wall heat exchange: equilibrium, nusselt, or "
                                     "hw in W/(m2 K)", parse=parse_exchange),
+    "fracture_supg_wall_conduction": param(False, "-", "with the equilibrium exchange, the rock's wall "
+                                           "conduction in the fracture heat's SUPG residual (consistent "
+                                           "SUPG: P2 reaches its accuracy; may over- or undershoot by "
+                                           "~1 % on wall layers thinner than 1/50 of the fracture cells; "
+                                           "docs/fracture_th.md)"),
     # state and wells (sections 2, 9)
     "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0"),
     "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0"),
@@ -194,6 +199,7 @@ FLUID_HEAT = ("fluid_density", "fluid_heat_capacity", "fluid_conductivity")
 FLUID_FLOW = ("fluid_viscosity", "fluid_compressibility", "fluid_thermal_expansion")
 JOINT = ("fracture_aperture", "fracture_normal_stiffness", "fracture_residual_fraction")
 CONTACT = ("contact_pairing", "fracture_friction", "fracture_cohesion")
+FRACTURE_HEAT = ("fracture_heat_exchange", "fracture_supg_wall_conduction")
 #: the defaults of a scene whose reference solution is frictionless
 FRICTIONLESS = {"fracture_friction": 0.0}
 WELLS = ("injection_rate", "injection_temperature", "production_pressure", "well_radius")

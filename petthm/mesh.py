@@ -100,9 +100,12 @@ def distribute(dm: PETSc.DMPlex) -> PETSc.DMPlex:
     restart does not depend on the partition (the partitioners are not
     deterministic from run to run) nor on the rank count."""
     from .errors import petsc_option_errors
+    from .partition import repair
     original = np.arange(*dm.getChart())
     if dm.comm.size > 1:
+        serial = dm.clone()
         sf = dm.distribute()
+        dm, sf = repair(serial, dm, sf)
         if sf is not None:
             _, leaves, remote = sf.getGraph()
             original = np.full(dm.getChart()[1] - dm.getChart()[0], -1, dtype=np.int64)

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
-from .fields import Domain, FieldRef, FieldSpec, Side, Trace, base_field, traces  # noqa: F401
+from .fields import Adjacent, Domain, FieldRef, FieldSpec, Side, Trace, base_field, traces  # noqa: F401
 
 Kernel = Callable[..., "object"]
 

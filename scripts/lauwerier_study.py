@@ -21,7 +21,8 @@ t >= 1e6 s (the earlier metric); ``beuler_layered`` runs the levels' fracture
 sizes and steps on the layered mesh (``-thm_lauwerier_layer``: the fracture's
 cells extruded to both sides in layers from 0.05 m growing by 1.5);
 ``bdf2_error`` and ``bdf2_error_layered`` take BDF2's steps from its own
-error estimate (``BDF2_ERROR_TOLERANCE``) on the graded and the layered mesh.
+error estimate (``BDF2_ERROR_TOLERANCE``) on the graded and the layered mesh;
+a ``_wall`` suffix adds ``-thm_fracture_supg_wall_conduction true``.
 The energy balance is evaluated for backward Euler only ('n/a' otherwise)."""
 from __future__ import annotations
 
@@ -47,7 +48,9 @@ SCHEMES = {"beuler": ("-", "backward Euler, schedule"), "bdf2": ("--", "BDF2, sc
            "beuler_error": ("-.", "backward Euler, error control"),
            "beuler_layered": ((0, (3, 1, 1, 1)), "backward Euler, layered mesh"),
            "bdf2_error": ((0, (5, 2)), "BDF2, error control"),
-           "bdf2_error_layered": ((0, (1, 1)), "BDF2, error control, layered mesh")}
+           "bdf2_error_layered": ((0, (1, 1)), "BDF2, error control, layered mesh"),
+           "bdf2_error_wall": ((0, (5, 1, 1, 1)), "BDF2, error control, SUPG wall conduction"),
+           "bdf2_error_layered_wall": ((0, (2, 2)), "BDF2, error control, layered, SUPG wall conduction")}
 #: the ``beuler_layered`` scheme's first layer (m: ~0.5 sqrt(kappa 1e4 s)) and layer growth
 LAYER, LAYER_GROWTH = 0.05, 1.5
 
@@ -65,8 +68,10 @@ def run_one(out, degree, level, scheme="beuler"):
         dt = ("-thm_dt_growth", 1.01, "-thm_dt_max", 1e5)
     bdf2 = ("-ts_type", "bdf", "-ts_bdf_order", 2) if scheme.startswith("bdf2") else ()
     mesh = ()
-    if scheme.endswith("_layered"):      # the level's steps and fracture size on a layered mesh
+    if "_layered" in scheme:             # the level's steps and fracture size on a layered mesh
         mesh = ("-thm_lauwerier_layer", LAYER, "-thm_lauwerier_layer_growth", LAYER_GROWTH)
+    if scheme.endswith("_wall"):         # the rock's wall conduction in the fracture's SUPG residual
+        mesh += ("-thm_fracture_supg_wall_conduction", "true")
     atol = None
     if "_error" in scheme:               # steps from the local error estimate, tolerance by level
         atol = (BDF2_ERROR_TOLERANCE if bdf2 else ERROR_TOLERANCE)[level]

@@ -2,7 +2,8 @@
 
     [mpiexec -n N] python scripts/split_report.py MESH.msh
 
-splits the mesh along its fractures, distributes it and prints JSON: the
+splits the mesh along its fractures, distributes it as petthm does (every
+cohesive cell with its two rock cells: ``partition``) and prints JSON: the
 counts before the split, and the vertex/cell/tip counts, orientation and
 pairing checks and DMPlex checks after it, serial and distributed."""
 import json
@@ -17,7 +18,8 @@ def main(argv=None) -> int:
     from petsc4py import PETSc
 
     from petthm.fracture import FACE_SETS, fracture_vertex_counts, split_fractures, split_statistics
-    from petthm.mesh import read_plex
+    from petthm.mesh import distribute, read_plex
+    from petthm.partition import split_count
     dm = read_plex(argv[0], PETSc.COMM_WORLD)
     counts = fracture_vertex_counts(dm)
     comm = dm.comm.tompi4py()
@@ -29,9 +31,10 @@ def main(argv=None) -> int:
     normals = [i.normal for i in infos]
     serial = split_statistics(dm, normals)
     if dm.comm.size > 1:
-        dm.distribute()
+        dm = distribute(dm)
     stats = {"before": before, "serial": serial, "distributed": split_statistics(dm, normals),
-             "ranks": dm.comm.size, "normals": [n.tolist() for n in normals]}
+             "ranks": dm.comm.size, "normals": [n.tolist() for n in normals],
+             "cohesive_apart_from_rock": split_count(dm)}
     if dm.comm.rank == 0:
         print(json.dumps(stats))
     return 0

@@ -60,7 +60,8 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ..model import CellJacobian, CellResidual, Domain, FacetTerm, Region
+from ..model import Adjacent, CellJacobian, CellResidual, Domain, FacetTerm, Region
+from .wallflux import SIDES, WallConduction, supg_g3, wall_flux
 from .flow import (Flow, _storages, aperture_state, g0_block, mobility, permeability_grad_p, storage_rate,
                    unit_darcy)
 
@@ -96,6 +97,7 @@ class Heat:
     aperture: Optional[object] = None
     lumped: bool = False            # capacity term by row-sum lumping (P1, no aperture)
     biot: tuple = ()                # (u field, alpha): alpha d(div u)/dt in the flow's mass balance (SUPG)
+    wall: Optional[WallConduction] = None      # the rock's wall conduction in R (kernels/wallflux.py)
 
     @property
     def advects(self) -> bool:
@@ -159,6 +161,8 @@ class _HeatPoint:
                 R = R - self.L * self.lapT
             if h.source is not None:
                 R = R - np.broadcast_to(h.source(ctx.x, ctx.t), R.shape)
+            if h.wall is not None:
+                R = R - wall_flux(h.wall, ctx)
             if h.flow is not None and h.supg:      # T div b = -rho_f C_f T m (the module docstring)
                 self.mass = storage_rate(h.flow, ctx)
                 if h.biot:
@@ -398,9 +402,18 @@ def heat_terms(h: Heat) -> tuple[list, list]:
         jac.append(CellJacobian(h.T, h.flow.p, g2=g2, g3=partial(heat_g3_Tp, hh), region=region))
         if supg and h.biot:
             jac.append(CellJacobian(h.T, h.biot[0], g3=partial(heat_g3_Tu, hh), region=region))
+    if supg and h.wall is not None:
+        jac += [CellJacobian(h.T, Adjacent(h.wall.field, s), g3=partial(heat_g3_wall, hh, s), region=region)
+                for s in SIDES]
     if h.aperture is not None:
         jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), partial(heat_s1_aperture, hh))
     return res, jac
+
+
+def heat_g3_wall(h: Heat, side, ctx):
+    """d(tau R b)/d(grad Tm) in the rock cell next to the face on ``side``."""
+    hp = heat_point(h, ctx)
+    return supg_g3(h.wall, side, hp.tau, hp.b, ctx)
 
 
 # -- boundaries of the matrix heat equation ------------------------------------------------

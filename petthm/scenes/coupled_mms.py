@@ -110,7 +110,7 @@ class CoupledMMS(Scene):
         mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_viscosity="water", fluid_compressibility=0.5,
                  fluid_thermal_expansion=0.01, fluid_density=1.0, fluid_heat_capacity=1.0,
                  fluid_conductivity=1.0),
-        mt.group("Fracture", mt.JOINT + mt.CONTACT + ("fracture_heat_exchange",), fracture_aperture=0.2,
+        mt.group("Fracture", mt.JOINT + mt.CONTACT + mt.FRACTURE_HEAT, fracture_aperture=0.2,
                  fracture_normal_stiffness=2.0,
                  **mt.FRICTIONLESS),
         mt.group("State", ("initial_temperature", "initial_pressure", "insitu_stress",

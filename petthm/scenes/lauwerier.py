@@ -173,7 +173,7 @@ class Lauwerier(Scene):
     description = "cold water through a fracture in impermeable rock vs Lauwerier (2D, H = 1 m)"
     parameters = (mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT),
                   mt.group("Rock", mt.ROCK_HEAT + ("rock_porosity",), **SCENE1_ROCK),
-                  mt.group("Fracture", ("fracture_aperture", "fracture_heat_exchange")),
+                  mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT),
                   SCENE1_WELLS, LauwerierParams)
     time = TimeDefaults(final_time=1e8, dt_initial=100.0, dt_growth=1.05, dt_max=1e6, mesh_size=10.0,
                         output_interval=20)

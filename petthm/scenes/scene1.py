@@ -29,7 +29,7 @@ from .fractured import (SCENE1_WELLS, WellsMonitor, balances_of, far_sides, heat
                         rigid_fracture_physics, strip_with_fracture, transmissivity)
 from .lauwerier import SCENE1_ROCK
 
-FRACTURE_HEAT = mt.group("Fracture", ("fracture_aperture", "fracture_heat_exchange"))
+FRACTURE_HEAT = mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT)
 
 
 # -- rigid_fracture (Scene 1) ---------------------------------------------------------------------------
@@ -202,7 +202,7 @@ class LeakoffHeat(Scene):
     parameters = (mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_compressibility=0.0,
                            fluid_thermal_expansion=0.0),
                   mt.group("Rock", mt.ROCK_HEAT + ("rock_porosity", "rock_permeability"), **SCENE1_ROCK),
-                  mt.group("Fracture", ("fracture_aperture", "fracture_heat_exchange"),
+                  mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT,
                            fracture_aperture=3e-3),
                   mt.group("Wells and initial state", ("injection_rate", "injection_temperature",
                                                        "initial_temperature", "initial_pressure"),

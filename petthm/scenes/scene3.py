@@ -162,7 +162,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
         rock_youngs_modulus=20e9, rock_poisson_ratio=0.2, rock_biot_coefficient=0.8, rock_porosity=0.1,
         rock_permeability=(1e-14,)),
         mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_viscosity="water"),
-        mt.group("Fracture", mt.JOINT + mt.CONTACT + ("fracture_heat_exchange",), fracture_aperture=0.6e-3,
+        mt.group("Fracture", mt.JOINT + mt.CONTACT + mt.FRACTURE_HEAT, fracture_aperture=0.6e-3,
                  **mt.FRICTIONLESS),
         WELLS3,
         mt.group("Coupling", ("thermomechanical_heating",)),

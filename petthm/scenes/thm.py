@@ -145,7 +145,7 @@ class PennyImpermeable(ClosedUnderStress, Scene):
                    "rock (3D)")
     parameters = (mt.group("Rock", mt.ELASTIC + mt.ROCK_HEAT + ("rock_porosity", "rock_thermal_expansion")),
                   mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_viscosity="water"),
-                  mt.group("Fracture", mt.JOINT + mt.CONTACT + ("fracture_heat_exchange",),
+                  mt.group("Fracture", mt.JOINT + mt.CONTACT + mt.FRACTURE_HEAT,
                            fracture_aperture=0.6e-3, **mt.FRICTIONLESS),
                   mt.group("Wells, in-situ and initial state", mt.WELLS + (
                       "insitu_stress", "initial_pressure", "initial_temperature"),

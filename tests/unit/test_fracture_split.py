@@ -80,6 +80,31 @@ def test_split_distributed_matches_serial(meshes, name, ranks):
         assert dis[key] == ser[key], key
     assert dis["orientation_errors"] == 0 and dis["plex_checks_failed"] == 0
     assert dis["pair_mismatch"] == 0.0
+    assert s["cohesive_apart_from_rock"] == 0
+
+
+def test_partition_groups_cohesive_cells_with_their_rock(meshes):
+    """``partition._grouped_owners``: a partition that puts neighbouring cells
+    on alternate ranks splits cohesive cells from their rock cells; the
+    grouped one puts each cohesive cell and its two rock cells on one rank
+    and moves no other cell."""
+    import numpy as np
+    from petsc4py import PETSc
+
+    from petthm import partition
+    from petthm.fracture import split_fractures
+    from petthm.mesh import read_plex
+    dm, _ = split_fractures(read_plex(meshes["disc3d"], PETSc.COMM_SELF))
+    coh, rock = partition._cohesive_neighbours(dm)
+    assert len(coh) and (rock >= 0).all()
+    n = dm.getHeightStratum(0)[1]
+    owner = np.arange(n) % 3
+    apart = (owner[coh] != owner[rock[:, 0]]) | (owner[coh] != owner[rock[:, 1]])
+    assert apart.sum() > len(coh) // 2                   # the test partition splits most of them
+    grouped = partition._grouped_owners(dm, owner)
+    assert (grouped[coh] == grouped[rock[:, 0]]).all() and (grouped[coh] == grouped[rock[:, 1]]).all()
+    others = np.setdiff1d(np.arange(n), np.concatenate([coh, rock.ravel()]))
+    assert (grouped[others] == owner[others]).all()
 
 
 def _heat_on(path, split):

@@ -54,6 +54,29 @@ def test_jacobian_check_detects_a_missing_coupling(tmp_path):
     assert err > 1e-3
 
 
+@pytest.mark.parametrize("degree", [1, 2])
+def test_wall_conduction_blocks_match_finite_differences(tmp_path, degree):
+    """The rock's wall conduction in the fracture heat's SUPG residual
+    (kernels/wallflux.py): the Tf rows' block in the rock temperature matches
+    finite differences, and without the blocks of the rock cells next to the
+    faces it does not (negative control)."""
+    from petthm.fields import Adjacent
+    from petthm.model import FRACTURE
+    from petthm.verify import jacobian_fd_block_errors
+    problem = _problem(tmp_path, "lauwerier", thm_fe_degree=degree, thm_fluid_viscosity="water",
+                       thm_fracture_supg_wall_conduction="true", **COARSE_LAUWERIER)
+    asm = problem.region(FRACTURE)
+    walls = [j for j in asm.model.jacobians if isinstance(j.trial, Adjacent)]
+    assert len(walls) == 2
+    err = jacobian_fd_block_errors(problem, t=1e5, shift=1e-4, eps=(1e-6, 1e-4))[("Tf", "Tm")]
+    asm.model.jacobians[:] = [j for j in asm.model.jacobians if j not in walls]
+    asm._build_pattern()
+    problem.J = None
+    without = jacobian_fd_block_errors(problem, t=1e5, shift=1e-4, eps=(1e-6, 1e-4))[("Tf", "Tm")]
+    print(f"P{degree} Tf-Tm block: {err:.1e}, without the wall blocks {without:.1e}")
+    assert err <= 1e-6 < 1e-4 <= without
+
+
 @pytest.mark.parametrize("dim,degree", [(2, 1), (2, 2), (3, 1), (3, 2)])
 def test_fracture_flow_patch_is_exact(tmp_path, dim, degree):
     _, s = run_petthm("fracture_flow_patch", tmp_path, "-thm_patch_dim", dim, "-thm_fe_degree", degree)
