@@ -2,7 +2,7 @@
 verification.md section 8): errors of every field against the mesh size,
 fitted rates, and the wall time of each run (error against run time).
 
-    python scripts/coupled_mms_study.py [--cases 2:1:open:1,...] [--out DIR] [-- petthm options]
+    python scripts/coupled_mms_study.py [--cases 2:1:open:1,...] [--out DIR] [--sizes H1,H2,...] [-- petthm options]
 
 A case is DIM:DEGREE:STATE:SUPG with its mesh sizes from ``SIZES``; the
 default set is every combination the acceptance asks for (2D and 3D, P1
@@ -37,10 +37,10 @@ def slope(h, e, last: bool = False) -> float:
     return float(np.polyfit(np.log(h), np.log(e), 1)[0])
 
 
-def run_case(case: str, out: str, extra=()) -> tuple[list[dict], list[dict]]:
+def run_case(case: str, out: str, extra=(), sizes=None) -> tuple[list[dict], list[dict]]:
     dim, degree, state, supg = case.split(":")
     rows = []
-    for size in SIZES[(int(dim), int(degree))]:
+    for size in sizes or SIZES[(int(dim), int(degree))]:
         d = os.path.join(out, "runs", f"{dim}d_p{degree}_{state}_supg{supg}_h{size:g}")
         s = run_petthm("coupled_mms", d, "-thm_coupled_mms_dim", dim, "-thm_fe_degree", degree,
                        "-thm_coupled_mms_state", state, "-thm_coupled_mms_supg", supg,
@@ -72,13 +72,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cases", default=",".join(DEFAULT_CASES))
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "coupled_mms"))
+    ap.add_argument("--sizes", default="", help="mesh sizes for every case, comma-separated "
+                    "(default: SIZES by dimension and degree)")
     ap.add_argument("extra", nargs="*",
                     help="more petthm options (after --), e.g. -thm_direct_max_unknowns 1000000")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     runs, rates = [], []
     for case in a.cases.split(","):
-        r, s = run_case(case, a.out, a.extra)
+        r, s = run_case(case, a.out, a.extra, [float(x) for x in a.sizes.split(",") if x])
         runs += r
         rates += s
         write_csv(os.path.join(a.out, "coupled_mms.csv"), runs)
