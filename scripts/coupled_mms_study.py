@@ -2,7 +2,8 @@
 verification.md section 8): errors of every field against the mesh size,
 fitted rates, and the wall time of each run (error against run time).
 
-    python scripts/coupled_mms_study.py [--cases 2:1:open:1,...] [--out DIR] [--sizes H1,H2,...] [-- petthm options]
+    python scripts/coupled_mms_study.py [--cases 2:1:open:1,...] [--out DIR] [--sizes H1,H2,...]
+                                        [-- petthm options]
 
 A case is DIM:DEGREE:STATE:SUPG with its mesh sizes from ``SIZES``; the
 default set is every combination the acceptance asks for (2D and 3D, P1
