@@ -5,9 +5,10 @@ conduction of the fracture heat's SUPG residual, kernels/wallflux.py) need
 that cell on the face's rank.  PETSc's partitioner usually puts a cohesive
 cell with its neighbours, but not always (2 of the 10 cohesive cells of a
 coarse rigid_fracture mesh on 4 ranks with PETSc 3.18; all 10 with 3.26).
-``repair`` checks the partition PETSc made and, where some cohesive cell is apart from a rock neighbour, moves each group of
-cells joined through cohesive cells (a rock cell, its cohesive cell, the
-rock cell on the other side) to one rank and distributes the serial mesh
+``repair`` checks the partition PETSc made and, where some cohesive cell is
+apart from a rock neighbour, moves each group of cells joined through
+cohesive cells (a rock cell, its cohesive cell, the rock cell on the other
+side) to one rank and distributes the serial mesh
 again with that partition (PETSc's shell partitioner).  Set-up only.
 """
 from __future__ import annotations
