@@ -48,13 +48,15 @@ def _history(outdir):
 @pytest.mark.parallel
 @pytest.mark.parametrize("scene,opts", [
     ("lauwerier", ("-thm_lauwerier_dim", 3, "-thm_mesh_size", 30, "-thm_lauwerier_fracture_size", 4,
-                   "-thm_final_time", 1e7)),
+                   "-thm_final_time", 1e7, "-thm_fracture_supg_wall_conduction", "true")),
     ("rigid_fracture", ("-thm_fe_degree", 1, "-thm_final_time", 1e7, "-thm_mesh_size", 50,
                         "-thm_scene1_fracture_size", 4, "-thm_rock_permeability", "1e-13")),
 ])
 def test_fracture_scene_parallel_matches_serial(tmp_path, scene, opts):
-    """Fracture scenes (ties and wells across ranks): the well histories and the
-    final matrix temperature on 2 ranks equal the serial run to 1e-8."""
+    """Fracture scenes (ties and wells across ranks; lauwerier with the SUPG
+    wall conduction, which reads the rock cells next to each fracture face):
+    the well histories and the final matrix temperature on 2 ranks equal the
+    serial run to 1e-8."""
     runs = {}
     for n in (1, 2):
         _, s = run_petthm(scene, tmp_path / f"n{n}", *opts, ranks=n, timeout=900)
