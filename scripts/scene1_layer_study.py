@@ -42,6 +42,9 @@ VARIANTS = {
     "layer_0.02_bdf2": ("-thm_scene1_layer", "0.02", "-thm_scene1_fracture_size", "0.5",
                         "-ts_type", "bdf", "-ts_bdf_order", "2"),
 }
+WALL = ("-thm_fracture_supg_wall_conduction", "true")
+VARIANTS.update({f"{k}_wall": v + WALL for k, v in list(VARIANTS.items())
+                 if k in ("graded_bdf2", "graded_f0.5_bdf2", "layer_0.05_g1.6_bdf2", "layer_0.02_bdf2")})
 #: the reference run of the permeable case (finest in space and second order in time)
 REFERENCE = "layer_0.02_bdf2"
 CASES = {"k0": "0", "1d_1e-13": "0,1e-13"}
