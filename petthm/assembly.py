@@ -179,10 +179,12 @@ class Assembler:
     def adjacent_gradients(self, ref: Adjacent, cells) -> np.ndarray:
         """Physical gradients of the basis of the rock cell next to each
         fracture face (an ``Adjacent`` field) at this region's quadrature
-        points, (nc, nq, nb, d); computed once (the geometry is fixed)."""
+        points, as G[c, q, a, j] (nc, nq, d, nb; nq = 1 for P1): a stack of
+        matrices, so that gradients are batched matrix products; computed
+        once (the geometry is fixed)."""
         if ref not in self._basis_gradients:
-            self._basis_gradients[ref] = self.mesh.adjacent_gradients(ref.side, self.disc.field(ref).degree,
-                                                                      self.rule.points)
+            G = self.mesh.adjacent_gradients(ref.side, self.disc.field(ref).degree, self.rule.points)
+            self._basis_gradients[ref] = np.ascontiguousarray(G.transpose(0, 1, 3, 2))
         return self._basis_gradients[ref][cells]
 
     def basis_laplacian(self, name, cells) -> np.ndarray:
@@ -392,12 +394,11 @@ class Assembler:
         component): (nc, nbF, nbG)."""
         W = self.W[cells]
         (nc, nq), d = W.shape, self.mesh.dim
-        G = self.adjacent_gradients(jb.trial, cells)                       # (nc, nq or 1, nbG, d)
-        G = np.broadcast_to(G, (nc, nq) + G.shape[2:])
+        G = self.adjacent_gradients(jb.trial, cells)                       # (nc, nq or 1, d, nbG)
         tab = self.tab(jb.test)
         gw = physical_gradient(tab.dphi.transpose(0, 2, 1)[None], ctx.Jinv)  # (nc, nq, nbF, d)
         g = np.broadcast_to(jb.g3(ctx), (nc, nq, 1, d, 1, d))[:, :, 0, :, 0, :]
-        T = np.einsum("cqab,cqjb->cqaj", g, G).reshape(nc, nq * d, -1)
+        T = (g @ G).reshape(nc, nq * d, -1)
         U = (W[:, :, None, None] * gw).transpose(0, 2, 1, 3).reshape(nc, -1, nq * d)
         return U @ T
 

@@ -125,7 +125,9 @@ class CellContext:
         """Physical gradient of the field with nodal values X (nc, nb, m); of
         an ``Adjacent`` field: in the rock cell next to each fracture face."""
         if isinstance(name, Adjacent):
-            return np.einsum("cqja,cjm->cqma", self._asm.adjacent_gradients(name, self._cells), X)
+            G = self._asm.adjacent_gradients(name, self._cells)                 # (nc, nq, d, nb)
+            nc, nq, d, nb = G.shape
+            return (G.reshape(nc, nq * d, nb) @ X).reshape(nc, nq, d, -1).transpose(0, 1, 3, 2)
         tab = self._asm.tab(name)
         if tab.constant_grad:          # one point per cell: sum_i X_i grad phi_i
             B = self._asm.basis_gradients(name, self._cells)                 # (nc, nb, d)
