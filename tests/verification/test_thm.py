@@ -18,14 +18,19 @@ COUPLINGS = {("u", "lam"), ("lam", "u"), ("u", "pf"), ("u", "Tm"), ("pf", "lam")
              ("Tf", "lam"), ("Tf", "u"), ("Tf", "pf")}
 
 
-@pytest.mark.parametrize("degree,exchange", [(1, "equilibrium"), (1, "nusselt"), (2, "equilibrium")])
+@pytest.mark.parametrize("degree,exchange", [(1, "equilibrium"), (1, "nusselt"), (2, "equilibrium"),
+                                             (2, "equilibrium+wall")])
 def test_scene2_jacobian_blocks_match_finite_differences(tmp_path, degree, exchange):
     """Every block of the Scene 2 Jacobian against central differences, each
     block on its own: the aperture a(lam, g) in the storage, da/dt, the cubic
     law and the fracture heat (capacity, conduction, advection, SUPG), mu(Tf),
-    beta_f, the face loads and the thermal strain."""
+    beta_f, the face loads and the thermal strain; ``+wall``: with the rock's
+    wall conduction in the fracture's SUPG residual (its tau and b depend on
+    the deformable aperture)."""
+    exchange, _, wall = exchange.partition("+")
     problem = build_problem(tmp_path, "penny_impermeable", thm_fe_degree=degree,
-                            thm_fracture_heat_exchange=exchange, **COARSE)
+                            thm_fracture_heat_exchange=exchange,
+                            thm_fracture_supg_wall_conduction=str(bool(wall)).lower(), **COARSE)
     # several steps, the best per block: the Tm-lam block of the wall exchange
     # is small in rows with large capacity and conduction terms (round-off
     # 4.7e-6 at 1e-6, 7e-8 at 1e-4), and with the lumped capacity the Tm-Tf
