@@ -36,8 +36,9 @@ q_L parts of div b, so m leaves out da/dt there.  Without this term (the
 advective form's residual, used before) the scheme is consistent only to
 O(tau T div b) with T in kelvin: the full coupled MMS (docs/coupled_mms.md)
 measured L2 slope 2 instead of 3 at P2 and a temperature error dominated by
-that term at P1.  What R still leaves out on the fracture is the wall
-conduction and lambda_f grad a . grad T (terms of the size of the
+that term at P1.  What R leaves out on the fracture is lambda_f grad a .
+grad T and, unless -thm_fracture_supg_wall_conduction is on, the rock's wall
+conduction (``Heat.wall``, kernels/wallflux.py; terms of the size of the
 temperature change, not of T).  The fracture's
 wall exchange hw (T - Tm) is left out of R: it is a coupling to the rock,
 and where it dominates (hw = Nu lambda_f / (2a) is about 1e4 W/m2/K, the
