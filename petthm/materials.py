@@ -170,9 +170,9 @@ DECLARED = {
                                     "hw in W/(m2 K)", parse=parse_exchange),
     "fracture_supg_wall_conduction": param(False, "-", "with the equilibrium exchange, the rock's wall "
                                            "conduction in the fracture heat's SUPG residual (consistent "
-                                           "SUPG: P2 reaches its accuracy; may over- or undershoot by "
-                                           "~1 % on wall layers thinner than 1/50 of the fracture cells; "
-                                           "docs/fracture_th.md)"),
+                                           "SUPG: P2 reaches its accuracy; over- or undershoots by "
+                                           "1-6 % where the wall layers are thin against the fracture "
+                                           "cells; docs/fracture_th.md)"),
     # state and wells (sections 2, 9)
     "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0"),
     "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0"),

@@ -19,7 +19,10 @@ rock), held P2 to P1's accuracy (docs/lauwerier_study.md).
 from the rock cell's dofs at the fracture's quadrature points), so the
 Jacobian gains the blocks d(Tf rows)/d(Tm of the two rock cells).  The
 finite exchange (``nusselt``, a given hw) keeps its exchange out of R
-(docs/fracture_th.md explains why) and gets no wall term.
+(docs/fracture_th.md explains why) and gets no wall term.  The term is an
+option (``-thm_fracture_supg_wall_conduction``, ``ModelBuilder.build``):
+where the wall layers are thin against the fracture's cells the consistent
+SUPG over- or undershoots by 1-6 % (measured; docs/fracture_th.md).
 """
 from __future__ import annotations
 
