@@ -385,20 +385,14 @@ class FractureSurface:
         """The rock cell next to each face on ``side`` (a ``fields.Side``), as
         an index among the mesh's cells.  ``mesh.distribute`` keeps every
         cohesive cell on the rank of its two rock cells."""
-        key = side.value
-        if key not in self._adjacent:
-            faces = self.faces if side.sign < 0 else self.plus_faces
-            cs, ce = self.mesh.cstart, self.mesh.cend
-            out = np.full(len(faces), -1, dtype=compat.INT)
-            for i, f in enumerate(faces):            # set-up only: one support query per face
-                rock = [c for c in self.dm.getSupport(int(f)) if cs <= c < ce]
-                if rock:
-                    out[i] = rock[0] - cs
-            if (out < 0).any():
-                raise RuntimeError(f"{int((out < 0).sum())} fracture faces have no local rock cell "
-                                   f"on their {side.value} side (the partition split them)")
-            self._adjacent[key] = out
-        return self._adjacent[key]
+        if not self._adjacent:
+            from .partition import cohesive_neighbours
+            _, rock = cohesive_neighbours(self.dm)             # same order as self.cells
+            if (rock < 0).any():
+                raise RuntimeError(f"{int((rock < 0).any(axis=1).sum())} fracture faces have no local "
+                                   "rock cell on one side (the partition split them)")
+            self._adjacent = {"-": rock[:, 0] - self.mesh.cstart, "+": rock[:, 1] - self.mesh.cstart}
+        return self._adjacent[side.value]
 
     def adjacent_gradients(self, side, degree: int, points: np.ndarray) -> np.ndarray:
         """Physical gradients of the basis (``degree``) of the rock cell next to

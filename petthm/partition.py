@@ -21,7 +21,7 @@ from scipy.sparse.csgraph import connected_components
 from . import compat
 
 
-def _cohesive_neighbours(dm: PETSc.DMPlex) -> tuple[np.ndarray, np.ndarray]:
+def cohesive_neighbours(dm: PETSc.DMPlex) -> tuple[np.ndarray, np.ndarray]:
     """Each local cohesive cell and the local rock cells next to its two faces:
     (cohesive cells (n,), rock cells (n, 2), -1 where that cell is not local)."""
     _, ce = dm.getHeightStratum(0)
@@ -38,7 +38,7 @@ def _cohesive_neighbours(dm: PETSc.DMPlex) -> tuple[np.ndarray, np.ndarray]:
 
 def split_count(dm: PETSc.DMPlex) -> int:
     """Number of cohesive cells (all ranks) whose rock neighbour is on another rank."""
-    _, rock = _cohesive_neighbours(dm)
+    _, rock = cohesive_neighbours(dm)
     return dm.comm.tompi4py().allreduce(int((rock < 0).any(axis=1).sum()))
 
 
@@ -64,7 +64,7 @@ def _grouped_owners(serial: PETSc.DMPlex, owner: np.ndarray) -> np.ndarray:
     rank of the group's first rock cell (the rock cells are the partitioner's
     balanced work; the cohesive cells, numbered last, may all sit on one
     rank, as PETSc's simple partitioner puts them)."""
-    coh, rock = _cohesive_neighbours(serial)
+    coh, rock = cohesive_neighbours(serial)
     n = len(owner)
     i = np.repeat(coh, 2)
     j = rock.ravel()

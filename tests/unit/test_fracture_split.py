@@ -95,7 +95,7 @@ def test_partition_groups_cohesive_cells_with_their_rock(meshes):
     from petthm.fracture import split_fractures
     from petthm.mesh import read_plex
     dm, _ = split_fractures(read_plex(meshes["disc3d"], PETSc.COMM_SELF))
-    coh, rock = partition._cohesive_neighbours(dm)
+    coh, rock = partition.cohesive_neighbours(dm)
     assert len(coh) and (rock >= 0).all()
     n = dm.getHeightStratum(0)[1]
     owner = np.arange(n) % 3
