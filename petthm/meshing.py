@@ -457,9 +457,12 @@ def _check_cell_limit(gmsh, dim: int) -> None:
                          "-thm_mesh_size (or raise -thm_max_cells on a machine with the memory)")
 
 
-def _write(gmsh, dim: int, path: str) -> str:
+def _write(gmsh, dim: int, path: str, place=None) -> str:
+    """Mesh, let ``place(gmsh)`` move the nodes (if given), write ``path``."""
     _check_cell_limit(gmsh, dim)
     gmsh.model.mesh.generate(dim)
+    if place is not None:
+        place(gmsh)
     gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
     gmsh.option.setNumber("Mesh.Binary", 0)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)

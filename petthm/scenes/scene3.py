@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import materials as mt
-from .. import meshing, probes
+from .. import layeredmesh, meshing, probes
 from .. import params as P
 from ..assembly import FieldScale
 from ..builders import ModelBuilder
@@ -67,6 +67,12 @@ class Scene3Params:
                                         lo=0.0, lo_open=True)
     scene3_fracture_size: float = param(20.0, "m", "mesh size on the fracture", lo=0.0, lo_open=True)
     scene3_well_size: float = param(5.0, "m", "mesh size along the perforations", lo=0.0, lo_open=True)
+    scene3_layer: float = param(0.0, "m", "thickness across the fracture of the first rock layer on each "
+                                "side (layered mesh parallel to the fracture, growing by "
+                                "-thm_scene3_layer_growth; ~0.5 sqrt(kappa t) of the first output time: 10 m "
+                                "for 10 years); 0: unstructured tetrahedra", lo=0.0)
+    scene3_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0,
+                                       lo_open=True)
     scene3_far_pressure: str = param("fixed", "-", "the box faces: fixed (pm = p0, fluid crosses them) or "
                                      "closed (no flow: all the produced water comes from the rock and the "
                                      "injector)", choices=("fixed", "closed"))
@@ -224,11 +230,32 @@ class InclinedPenny(ClosedUnderStress, Scene):
     def generate_mesh(self, path, size):
         p = self.p
         L = self.L
+        if p.scene3_layer > 0:
+            return self._layered_mesh(path, size or L / 4)
         fr = [meshing.Fracture("disc", center=(0.0, 0.0, 0.0), radius=p.scene3_radius, dip=p.scene3_dip,
                                strike=1, size=p.scene3_fracture_size)]
         return meshing.box_with_fractures(path, [2 * L] * 3, size or L / 4, fr, grading_distance=L,
                                           origin=(-L, -L, -L), well_size=p.scene3_well_size,
                                           well_lines=[w.segment() for w in self.perforations()])
+
+    def _layered_mesh(self, path, size):
+        """Layers parallel to the fracture (``layeredmesh``), the perforations'
+        ends on layer boundaries."""
+        p = self.p
+        L = self.L
+        zone = 0.5 * L * (1.0 - math.tan(math.radians(p.scene3_dip)))
+        top = p.scene3_well_standoff + p.scene3_perforation
+        if p.scene3_dip >= 45.0 or top >= zone:
+            raise InputError(f"option -thm_scene3_layer = {p.scene3_layer:g}: the layered mesh needs "
+                             f"-thm_scene3_dip < 45 (got {p.scene3_dip:g}) and the perforations' tops "
+                             f"({top:g} m above the fracture) below {zone:.4g} m (half the rock above "
+                             "the fracture's lowest point); use -thm_scene3_layer 0 or a larger "
+                             "-thm_scene3_box")
+        wells = [tuple(w.bottom[:2]) for w in self.perforations()]
+        return layeredmesh.layered_box_with_inclined_disc(
+            path, L, p.scene3_radius, p.scene3_dip, size, p.scene3_fracture_size, p.scene3_layer,
+            p.scene3_layer_growth, wells=wells, well_size=p.scene3_well_size,
+            well_heights=(p.scene3_well_standoff, top))
 
     # -- model ------------------------------------------------------------------------------
     def check(self, mesh):

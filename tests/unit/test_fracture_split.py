@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from conftest import MPI_ENV, ROOT
@@ -195,5 +196,41 @@ def test_layered_slab_with_fracture(tmp_path):
     s = _stats(path, 1)
     after = s["serial"]
     assert after["cohesive_cells"] == sum(s["before"]["facets"].values()) == 30
+    assert after["orientation_errors"] == 0 and after["plex_checks_failed"] == 0
+    assert after["pair_mismatch"] == 0.0
+
+
+def test_layered_box_with_inclined_disc(tmp_path):
+    """Scene 3's layered mesh: the tetrahedra tile the box with positive
+    volumes; the fracture's faces lie on the dipping plane and cover the
+    disc; the first layer is ``layer`` thick across the fracture; the wells'
+    columns are vertical lines of the mesh with vertices at the
+    perforations' ends; the split passes its checks."""
+    import meshio
+    from petthm import layeredmesh
+    L, R, dip, layer = 3.0, 1.0, 30.0, 0.02
+    path = layeredmesh.layered_box_with_inclined_disc(str(tmp_path / "inc.msh"), L, R, dip, 1.5, 0.25, layer,
+                                                      1.5, wells=[(0.0, -0.75), (0.0, 0.75)], well_size=0.1,
+                                                      well_heights=(0.05, 0.15))
+    m = meshio.read(path)
+    X, tet = m.points, m.cells_dict["tetra"]
+    vol = np.einsum("ij,ij->i", np.cross(X[tet[:, 1]] - X[tet[:, 0]], X[tet[:, 2]] - X[tet[:, 0]]),
+                    X[tet[:, 3]] - X[tet[:, 0]]) / 6
+    assert vol.min() > 0 and abs(vol.sum() - (2 * L) ** 3) < 1e-9 * (2 * L) ** 3
+    d = np.radians(dip)
+    n = np.array([np.sin(d), 0.0, np.cos(d)])
+    tri = m.cells_dict["triangle"][m.cell_data_dict["gmsh:physical"]["triangle"] == M.FRACTURE_TAG0]
+    assert np.abs(X[tri.ravel()] @ n).max() < 1e-12 * L
+    area = np.linalg.norm(np.cross(X[tri[:, 1]] - X[tri[:, 0]], X[tri[:, 2]] - X[tri[:, 0]]),
+                          axis=1).sum() / 2
+    assert 0.97 * np.pi * R ** 2 < area <= np.pi * R ** 2
+    dist = np.abs(X @ n)
+    assert np.min(dist[dist > 1e-12]) == pytest.approx(layer, rel=1e-9)
+    for y in (-0.75, 0.75):
+        z = X[(np.abs(X[:, 0]) < 1e-12) & (np.abs(X[:, 1] - y) < 1e-12), 2]
+        assert np.any(np.isclose(z, 0.05, atol=1e-12)) and np.any(np.isclose(z, 0.15, atol=1e-12))
+    s = _stats(path, 1)
+    after = s["serial"]
+    assert after["cohesive_cells"] == len(tri)
     assert after["orientation_errors"] == 0 and after["plex_checks_failed"] == 0
     assert after["pair_mismatch"] == 0.0

@@ -95,6 +95,32 @@ def test_scene3_coarse_start(tmp_path, petthm_run):
     assert float(rows[-1]["aperture_increase_max"]) > 0          # the cooled rock contracts
 
 
+def test_scene3_layered_mesh_start(tmp_path, petthm_run):
+    """The layered mesh (-thm_scene3_layer, issue 16 item 2) for 2 days:
+    the initial state is exact, the wells' columns carry exactly Q, the
+    balances close, a = a0 - lam/Kn where closed; the first layer is at
+    most as thick as asked.  A dip the layered box cannot hold is a one-line error."""
+    out = tmp_path / "run"
+    petthm_run("inclined_penny", out, "-thm_fe_degree", 1, "-thm_final_time", 2 * 86400,
+               "-thm_dt_growth", 1.0, "-thm_scene3_layer", 10, "-thm_scene3_layer_growth", 2, *ARGS)
+    rows = _history(out)
+    assert float(rows[0]["lam_min"]) == pytest.approx(40e6, rel=1e-12)
+    assert len(rows) == 3
+    for r in rows[1:]:
+        assert float(r["injection_rate"]) == pytest.approx(0.005, rel=1e-12)
+        assert float(r["production_rate"]) == pytest.approx(0.005, rel=1e-12)
+        assert abs(float(r["mass_balance"])) <= 1e-6 and abs(float(r["energy_balance"])) <= 1e-6
+        assert float(r["aperture_identity"]) <= 1e-10
+    import meshio
+    X = meshio.read(out / "mesh.msh").points
+    d = np.abs(X @ np.array([0.5, 0.0, np.sqrt(3.0) / 2]))
+    assert 5.0 < np.min(d[d > 1e-9]) <= 10.0 * (1 + 1e-9)   # at most 10 m (a perforation's end may cut it)
+    proc, _ = petthm_run("inclined_penny", tmp_path / "steep", "-thm_scene3_layer", 10, "-thm_scene3_dip", 50,
+                         *ARGS, check=False)
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr
+    assert "petthm: error:" in proc.stderr and "-thm_scene3_layer" in proc.stderr
+
+
 def test_producer_drawn_below_zero_pressure_stops_cleanly(tmp_path, petthm_run):
     """A production rate the rock cannot give ends the run as failed with a
     message naming the option, never with NaN or a traceback."""
