@@ -59,6 +59,19 @@ def _bad_options_line(path: str) -> str | None:
     return None
 
 
+#: environment variables a launcher (mpiexec, srun) sets: a process without any of them is an MPI singleton
+LAUNCHER_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE", "MPI_LOCALNRANKS")
+
+
+def isolate_singleton(environ=os.environ) -> None:
+    """A run started without mpiexec tells Open MPI not to start its
+    support daemon (``ess_singleton_isolated``: petthm never spawns
+    processes): MPI_Init takes ~0.1 s less.  A value the user set wins;
+    other MPI libraries ignore the variable."""
+    if not any(v in environ for v in LAUNCHER_VARIABLES):
+        environ.setdefault("OMPI_MCA_ess_singleton_isolated", "1")
+
+
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     scene = argv[0] if argv and not argv[0].startswith("-") else None
@@ -83,6 +96,7 @@ def main(argv=None) -> int:
             bad = _bad_options_line(rest[i + 1])
             if bad:
                 return _fail(bad, rank)
+    isolate_singleton()
     import petsc4py
     try:
         petsc4py.init([sys.argv[0]] + rest)          # PETSc reads the options files here

@@ -337,3 +337,20 @@ def test_a_block_recipe_that_leaves_out_a_field_is_an_error(tmp_path):
                          f"{ROOT}/options/solvers/block.opts", "-vi_groups", "mech=u", check=False)
     msg = _one_line_error(proc)
     assert "-vi_groups = mech=u leaves out the field(s) lam" in msg
+
+
+def test_a_singleton_run_isolates_open_mpi_and_a_launched_one_does_not():
+    """Without mpiexec petthm asks Open MPI for an isolated singleton (no
+    support daemon); under a launcher, or with the user's own value, it
+    leaves the environment alone."""
+    from petthm.__main__ import isolate_singleton
+    env = {}
+    isolate_singleton(env)
+    assert env == {"OMPI_MCA_ess_singleton_isolated": "1"}
+    for launched in ({"OMPI_COMM_WORLD_SIZE": "2"}, {"PMIX_RANK": "0"}, {"PMI_RANK": "1"}):
+        env = dict(launched)
+        isolate_singleton(env)
+        assert env == launched
+    env = {"OMPI_MCA_ess_singleton_isolated": "0"}
+    isolate_singleton(env)
+    assert env == {"OMPI_MCA_ess_singleton_isolated": "0"}
