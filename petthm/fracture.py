@@ -409,6 +409,22 @@ class FractureSurface:
         dphi = fe.tabulate(self.dim, degree, xi.reshape(-1, self.dim)).dphi.reshape(nc, nq, -1, self.dim)
         return np.einsum("cqjk,cka->cqja", dphi, m.Jinv[rc])
 
+    def thinnest_wall_layer(self) -> float:
+        """The smallest ratio, over all faces and both sides (all ranks), of
+        the rock cell's height over the face (dim V / A) to the face's size;
+        inf without faces."""
+        from math import factorial
+        from .fields import Side
+        ratio = np.inf
+        if self.ncells:
+            area = np.abs(self.detJ) / factorial(self.rdim)
+            for side in (Side.MINUS, Side.PLUS):
+                rc = self.adjacent_cells(side)
+                height = self.dim * np.abs(self.mesh.detJ[rc]) / factorial(self.dim) / area
+                ratio = min(ratio, float(np.min(height / self.h)))
+        from mpi4py import MPI
+        return self.dm.comm.tompi4py().allreduce(ratio, op=MPI.MIN)
+
     @property
     def ncells(self) -> int:
         return len(self.faces)

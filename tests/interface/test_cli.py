@@ -354,3 +354,17 @@ def test_a_singleton_run_isolates_open_mpi_and_a_launched_one_does_not():
     env = {"OMPI_MCA_ess_singleton_isolated": "0"}
     isolate_singleton(env)
     assert env == {"OMPI_MCA_ess_singleton_isolated": "0"}
+
+
+def test_the_wall_term_on_thin_rock_layers_is_warned_about(tmp_path):
+    """-thm_fracture_supg_wall_conduction on rock layers < 0.05 of the
+    fracture's cells (0.05 m under 10 m here) prints one warning naming the
+    option; the same mesh without the term, none."""
+    mesh = ["-thm_scene1_layer", 0.05, "-thm_scene1_fracture_size", 10, "-thm_scene1_margin", 40,
+            "-thm_mesh_size", 40, "-thm_final_time", 1e3]
+    proc, _ = run_petthm("rigid_fracture", tmp_path / "on", *mesh,
+                         "-thm_fracture_supg_wall_conduction", "true")
+    warned = [ln for ln in proc.stdout.splitlines() if ln.startswith("petthm: warning:")]
+    assert len(warned) == 1 and "-thm_fracture_supg_wall_conduction" in warned[0] and "0.00487" in warned[0]
+    proc, _ = run_petthm("rigid_fracture", tmp_path / "off", *mesh)
+    assert "petthm: warning:" not in proc.stdout
