@@ -66,8 +66,8 @@ LAUNCHER_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE
 def isolate_singleton(environ=os.environ) -> None:
     """A run started without mpiexec tells Open MPI not to start its
     support daemon (``ess_singleton_isolated``: petthm never spawns
-    processes): MPI_Init takes ~0.1 s less.  A value the user set wins;
-    other MPI libraries ignore the variable."""
+    processes): a small run ends 0.27 s sooner (measured, docs/performance.md).
+    A value the user set wins; other MPI libraries ignore the variable."""
     if not any(v in environ for v in LAUNCHER_VARIABLES):
         environ.setdefault("OMPI_MCA_ess_singleton_isolated", "1")
 
