@@ -119,6 +119,9 @@ def test_scene3_layered_mesh_start(tmp_path, petthm_run):
                          *ARGS, check=False)
     assert proc.returncode != 0 and "Traceback" not in proc.stderr
     assert "petthm: error:" in proc.stderr and "-thm_scene3_layer" in proc.stderr
+    proc, _ = petthm_run("inclined_penny", tmp_path / "thick", "-thm_scene3_layer", 500, *ARGS, check=False)
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr
+    assert "petthm: error: option -thm_scene3_layer = 500 m" in proc.stderr
 
 
 def test_producer_drawn_below_zero_pressure_stops_cleanly(tmp_path, petthm_run):
