@@ -341,19 +341,19 @@ def test_a_block_recipe_that_leaves_out_a_field_is_an_error(tmp_path):
 
 def test_a_singleton_run_isolates_open_mpi_and_a_launched_one_does_not():
     """Without mpiexec petthm asks Open MPI for an isolated singleton (no
-    support daemon); under a launcher, or with the user's own value, it
+    support daemon, no network probe); under a launcher, or with the user's own value, it
     leaves the environment alone."""
     from petthm.__main__ import isolate_singleton
     env = {}
     isolate_singleton(env)
-    assert env == {"OMPI_MCA_ess_singleton_isolated": "1"}
+    assert env == {"OMPI_MCA_ess_singleton_isolated": "1", "OMPI_MCA_pml": "ob1"}
     for launched in ({"OMPI_COMM_WORLD_SIZE": "2"}, {"PMIX_RANK": "0"}, {"PMI_RANK": "1"}):
         env = dict(launched)
         isolate_singleton(env)
         assert env == launched
-    env = {"OMPI_MCA_ess_singleton_isolated": "0"}
+    env = {"OMPI_MCA_ess_singleton_isolated": "0", "OMPI_MCA_pml": "ucx"}
     isolate_singleton(env)
-    assert env == {"OMPI_MCA_ess_singleton_isolated": "0"}
+    assert env == {"OMPI_MCA_ess_singleton_isolated": "0", "OMPI_MCA_pml": "ucx"}
 
 
 def test_the_wall_term_on_thin_rock_layers_is_warned_about(tmp_path):
