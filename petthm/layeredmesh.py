@@ -36,7 +36,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .meshing import (WELL_TAG0, _background_size, _start, _tag_domain, _tag_fracture, _threshold,
+from .meshing import (_background_size, _start, _tag_domain, _tag_fracture, _threshold, tag_well_points,
                       _write)
 
 
@@ -63,14 +63,16 @@ def shared_boundaries(layer: float, ratio: float, cap: float, heights: Sequence[
     return b
 
 
-def column_boundaries(shared: np.ndarray, ratio: float, count: int, H: np.ndarray) -> np.ndarray:
-    """(len(H), len(shared) + count) boundaries per column: ``shared``, then
-    ``count`` layers growing by ``ratio`` scaled to reach each column's
-    height ``H``."""
+def level_heights(shared: np.ndarray, ratio: float, count: int, H: np.ndarray,
+                  k: np.ndarray) -> np.ndarray:
+    """The height above the plane of level ``k`` in a column of height ``H``
+    (per node): ``shared[k]`` in the common layers, above them ``count``
+    layers growing by ``ratio`` scaled to reach ``H``."""
     g = ratio ** np.arange(1, count + 1)
-    frac = np.cumsum(g) / g.sum()
-    rest = shared[-1] + (H[:, None] - shared[-1]) * frac[None, :]
-    return np.hstack([np.broadcast_to(shared, (len(H), len(shared))), rest])
+    frac = np.concatenate([[0.0], np.cumsum(g) / g.sum()])
+    n = len(shared) - 1
+    far = np.clip(k - n, 0, count)
+    return np.where(k <= n, shared[np.minimum(k, n)], shared[-1] + (H - shared[-1]) * frac[far])
 
 
 def far_layers(shared: np.ndarray, ratio: float, H_max: float) -> int:
@@ -119,12 +121,7 @@ def layered_box_with_inclined_disc(path: str, half: float, radius: float, dip: f
     occ.synchronize()
     on_outer = _tag_domain(gmsh, 3, [t for (_, t) in gmsh.model.getEntities(3)])
     _tag_fracture(gmsh, 3, 0, on_disc, on_outer)
-    points = [(t, np.array(gmsh.model.getValue(0, t, []))) for (_, t) in gmsh.model.getEntities(0)]
-    well_tags = []
-    for i, (x, y) in enumerate(wells):
-        near = [t for (t, X) in points if np.hypot(X[0] - x, X[1] - y) < 1e-9 * half and abs(X[2]) < 1e-12]
-        gmsh.model.addPhysicalGroup(0, near, WELL_TAG0 + i)
-        well_tags += near
+    well_tags = tag_well_points(gmsh, wells, 1e-9 * half)
     mf = gmsh.model.mesh.field
     fields = [_threshold(mf, "SurfacesList", on_disc, disc_size * cos, size, radius)]
     if well_tags and well_size:
@@ -150,11 +147,10 @@ def _place_levels(gmsh, N: int, half: float, tan: float, shared: np.ndarray, rat
     zp = -X[:, 0] * tan
     up = zeta >= 0
     H = np.where(up, half - zp, half + zp)
-    b = column_boundaries(shared, ratio, count, H)
-    z = zp + np.where(up, 1.0, -1.0) * b[np.arange(len(k)), k]
+    z = zp + np.where(up, 1.0, -1.0) * level_heights(shared, ratio, count, H, k)
     z[k == N] = np.where(up, half, -half)[k == N]
     for t, x, y, zz in zip(tags, X[:, 0], X[:, 1], z):
         gmsh.model.mesh.setNode(int(t), [x, y, zz], [])
 
 
-__all__ = ["layered_box_with_inclined_disc", "shared_boundaries", "column_boundaries"]
+__all__ = ["layered_box_with_inclined_disc", "shared_boundaries", "level_heights"]

@@ -224,6 +224,20 @@ def _extrude_in_layers(gmsh, ents: list, direction: Sequence[float], total: floa
     return plus
 
 
+def tag_well_points(gmsh, wells: Sequence[tuple], tol: float) -> list[int]:
+    """Give the geometry's points at each of ``wells`` (coordinates padded
+    with zeros to 3D; within ``tol``) the physical group WELL_TAG0 + i;
+    returns their tags."""
+    points = [(t, np.array(gmsh.model.getValue(0, t, []))) for (_, t) in gmsh.model.getEntities(0)]
+    tags = []
+    for i, w in enumerate(wells):
+        w = np.array(tuple(w) + (0.0,) * (3 - len(w)), dtype=float)
+        near = [t for (t, x) in points if np.linalg.norm(x - w) < tol]
+        gmsh.model.addPhysicalGroup(0, near, WELL_TAG0 + i)
+        tags += near
+    return tags
+
+
 def layered_half_box_with_disc(path: str, half: float, radius: float, size: float, disc_size: float,
                                layer: float, ratio: float, wells: Sequence[tuple] = (),
                                well_size: float = 0.0) -> str:
@@ -255,12 +269,7 @@ def layered_half_box_with_disc(path: str, half: float, radius: float, size: floa
     _extrude_in_layers(gmsh, [(2, t) for t in plane], (0.0, 0.0, 1.0), half, layer, ratio)
     on_outer = _tag_domain(gmsh, 3, [t for (_, t) in gmsh.model.getEntities(3)])
     _tag_fracture(gmsh, 3, 0, on_disc, on_outer)
-    points = [(t, np.array(gmsh.model.getValue(0, t, []))) for (_, t) in gmsh.model.getEntities(0)]
-    well_tags = []
-    for i, w in enumerate(wells):
-        near = [t for (t, x) in points if np.linalg.norm(x - np.asarray(w, dtype=float)) < 1e-9 * half]
-        gmsh.model.addPhysicalGroup(0, near, WELL_TAG0 + i)
-        well_tags += near
+    well_tags = tag_well_points(gmsh, wells, 1e-9 * half)
     mf = gmsh.model.mesh.field
     fields = [_threshold(mf, "SurfacesList", on_disc, disc_size, size, radius)]
     if well_tags and well_size:
