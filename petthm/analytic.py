@@ -9,7 +9,6 @@ transport with a uniform leakoff fraction m (matrix advection on or off).
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erfc
 
 
 def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T0, Ti):
@@ -21,6 +20,7 @@ def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T
     td = aperture * x / q
     tt = np.maximum(t - td, 1e-300)
     arg = conductivity * x / (fluid_rho_c * q * np.sqrt(kappa * tt))
+    from scipy.special import erfc
     return np.where(t > td, T0 + (Ti - T0) * erfc(arg), T0)
 
 

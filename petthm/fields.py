@@ -20,6 +20,26 @@ from . import compat
 from .mesh import Mesh, simplex_stratum
 
 
+def same_points(ref: np.ndarray, query: np.ndarray, tol: float) -> np.ndarray:
+    """The row of ``ref`` at each row of ``query``'s coordinates (-1 where
+    none lies within ``tol``).  The copies of a split node have the same
+    coordinates bit for bit, so an exact match (a sort) finds them; only rows
+    left over go to a k-d tree (scipy's import costs a small run 0.09 s)."""
+    def key(X):
+        X = np.ascontiguousarray(X, dtype=float) + 0.0          # -0.0 -> 0.0
+        return X.view(np.dtype((np.void, X.itemsize * X.shape[1]))).ravel()
+    kr, kq = key(ref), key(query)
+    order = np.argsort(kr, kind="stable")
+    pos = np.minimum(np.searchsorted(kr[order], kq), max(len(kr) - 1, 0))
+    idx = np.where(kr[order][pos] == kq, order[pos], -1) if len(kr) else np.full(len(kq), -1)
+    left = idx < 0
+    if left.any() and len(kr):
+        from scipy.spatial import cKDTree
+        dist, near = cKDTree(ref).query(query[left])
+        idx[left] = np.where(dist <= tol, near, -1)
+    return idx
+
+
 class Domain(enum.Enum):
     """Where a field lives and a term is integrated."""
     MATRIX = "matrix"            # the cells of the (split) mesh
@@ -174,7 +194,6 @@ class Discretisation:
         """Find, for every tied node of ``f``, the global unknown of ``g`` at the
         same coordinates (the - copy of the node; on any rank), or the Dirichlet
         boundary of ``g`` that constrains it."""
-        from scipy.spatial import cKDTree
         pts = self.tied_points[f]
         coords = self.mesh.point_coordinates(pts)
         dofs = self.offsets[f][pts - self.pstart]
@@ -197,9 +216,9 @@ class Discretisation:
         if free.any():
             if not len(allc):
                 raise RuntimeError(f"no {g} unknowns to tie {f} to")
-            dist, idx = cKDTree(allc).query(coords[free])
             h = float(self.mesh.h.max()) if self.mesh.ncells else 1.0
-            if dist.max() > 1e-8 * h:
+            idx = same_points(allc, coords[free], 1e-8 * h)
+            if np.any(idx < 0):
                 raise RuntimeError(f"a tied {f} node has no {g} node at its position")
             target[free] = allg[idx]
         self.ties.append(Tie(f, g, dofs[free], target[free]))

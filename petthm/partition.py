@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 from petsc4py import PETSc
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from . import compat
 
@@ -68,6 +66,8 @@ def _grouped_owners(serial: PETSc.DMPlex, owner: np.ndarray) -> np.ndarray:
     n = len(owner)
     i = np.repeat(coh, 2)
     j = rock.ravel()
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
     graph = coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
     _, label = connected_components(graph, directed=False)
     first = np.full(label.max() + 1, -1, dtype=np.int64)

@@ -7,8 +7,11 @@ import numpy as np
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+#: Open MPI on one node: run as root, more ranks than cores, and the ob1 message layer (what Open
+#: MPI falls back to here after probing UCX for a network: the probe costs every rank ~0.2 s)
 MPI_ENV = dict(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="1")
+               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="1",
+               OMPI_MCA_pml="ob1")
 
 
 def pytest_configure(config):

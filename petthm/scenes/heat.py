@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import erfc
 
 from .. import materials as mt
 from .. import meshing, probes
@@ -210,6 +209,7 @@ class HeatErfc(Scene):
         z = x[..., 0]
         if t <= 0:
             return np.full(z.shape, T0)
+        from scipy.special import erfc
         return T0 + (Ts - T0) * erfc(z / (2 * np.sqrt(kappa * t)))
 
     def build(self, mesh, degree):

@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import erfc
 
 from .. import materials as mt
 from .. import meshing, probes
@@ -173,6 +172,7 @@ class ThermalStress(Scene):
     def dT_exact(self, x, t):
         p = self.p
         dTs = p.surface_temperature - p.initial_temperature
+        from scipy.special import erfc
         return dTs * erfc(x[..., 0] / (2 * np.sqrt(self.kappa() * t))) if t > 0 else 0.0 * x[..., 0]
 
     def stress_exact(self, x, t):

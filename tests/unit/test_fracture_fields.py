@@ -126,3 +126,22 @@ def test_fracture_field_in_parallel(tmp_path, dim):
     for n in (2, 3):
         assert out[n][0] <= 1e-10 and out[n][1] == out[1][1]
         assert out[n][2] == pytest.approx(out[1][2], rel=1e-12)
+
+
+def test_same_points_matches_copies_exactly_and_near_ones_within_the_tolerance():
+    """A tied node finds the row with its coordinates: bit-equal copies (also
+    -0.0 against 0.0) by the sort, rows off by less than the tolerance by the
+    k-d tree, a row farther than it nowhere (-1)."""
+    from petthm.fields import same_points
+    rng = np.random.default_rng(0)
+    ref = rng.random((500, 3))
+    rows = rng.permutation(500)[:200]
+    ref[rows[0]] = [0.0, -0.0, 1.0]
+    query = ref[rows].copy()
+    query[0] = [-0.0, 0.0, 1.0]
+    assert np.array_equal(same_points(ref, query, 1e-8), rows)
+    assert np.array_equal(same_points(ref, query + 1e-12, 1e-8), rows)
+    query[5] += 1e-3
+    found = same_points(ref, query, 1e-8)
+    assert found[5] == -1 and np.array_equal(np.delete(found, 5), np.delete(rows, 5))
+    assert np.array_equal(same_points(np.zeros((0, 3)), query[:2], 1e-8), [-1, -1])
