@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import os
 import statistics
 import subprocess
@@ -30,13 +31,15 @@ import tempfile
 import time
 from pathlib import Path
 
+from petthm.__main__ import isolate_singleton
+
 SCENES = ("terzaghi", "heat_erfc", "fracture_flow_patch", "mandel", "contact_patch",
           "lauwerier")
 MARKS = {"start": "0 TS", "first": "1 TS"}
 #: the bare import, as a plain singleton and as ``python -m petthm`` sets one up (petthm.__main__)
-BARE = {"import petsc4py.PETSc": {},
-        "import petsc4py.PETSc, isolated ob1 singleton": {"OMPI_MCA_ess_singleton_isolated": "1",
-                                                          "OMPI_MCA_pml": "ob1"}}
+_SINGLETON: dict[str, str] = {}
+isolate_singleton(_SINGLETON)
+BARE = {"import petsc4py.PETSc": {}, "import petsc4py.PETSc, isolated ob1 singleton": _SINGLETON}
 
 
 def time_run(argv: list[str], **extra: str) -> dict[str, float]:
@@ -60,7 +63,6 @@ def time_run(argv: list[str], **extra: str) -> dict[str, float]:
 
 
 def cells(out: Path) -> int:
-    import json
     return int(json.loads((out / "summary.json").read_text()).get("cells", 0))
 
 

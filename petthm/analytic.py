@@ -15,12 +15,12 @@ def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T
     """Lauwerier (1955) fracture temperature (verification.md section 1):
     T0 + (Ti - T0) erfc(lambda x / (rho_f c_f q sqrt(kappa (t - t_d)))) U(t - t_d),
     t_d = a x / q, kappa = lambda / (rho C); q per metre of fracture height."""
+    from scipy.special import erfc
     x = np.asarray(x, dtype=float)
     kappa = conductivity / rho_c
     td = aperture * x / q
     tt = np.maximum(t - td, 1e-300)
     arg = conductivity * x / (fluid_rho_c * q * np.sqrt(kappa * tt))
-    from scipy.special import erfc
     return np.where(t > td, T0 + (Ti - T0) * erfc(arg), T0)
 
 

@@ -30,8 +30,9 @@ def same_points(ref: np.ndarray, query: np.ndarray, tol: float) -> np.ndarray:
         return X.view(np.dtype((np.void, X.itemsize * X.shape[1]))).ravel()
     kr, kq = key(ref), key(query)
     order = np.argsort(kr, kind="stable")
-    pos = np.minimum(np.searchsorted(kr[order], kq), max(len(kr) - 1, 0))
-    idx = np.where(kr[order][pos] == kq, order[pos], -1) if len(kr) else np.full(len(kq), -1)
+    ks = kr[order]
+    pos = np.minimum(np.searchsorted(ks, kq), max(len(kr) - 1, 0))
+    idx = np.where(ks[pos] == kq, order[pos], -1) if len(kr) else np.full(len(kq), -1)
     left = idx < 0
     if left.any() and len(kr):
         from scipy.spatial import cKDTree

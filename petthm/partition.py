@@ -62,12 +62,12 @@ def _grouped_owners(serial: PETSc.DMPlex, owner: np.ndarray) -> np.ndarray:
     rank of the group's first rock cell (the rock cells are the partitioner's
     balanced work; the cohesive cells, numbered last, may all sit on one
     rank, as PETSc's simple partitioner puts them)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
     coh, rock = cohesive_neighbours(serial)
     n = len(owner)
     i = np.repeat(coh, 2)
     j = rock.ravel()
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
     graph = coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
     _, label = connected_components(graph, directed=False)
     first = np.full(label.max() + 1, -1, dtype=np.int64)

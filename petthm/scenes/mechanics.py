@@ -170,9 +170,9 @@ class ThermalStress(Scene):
         return p.rock_conductivity / (p.rock_density * p.rock_heat_capacity)
 
     def dT_exact(self, x, t):
+        from scipy.special import erfc
         p = self.p
         dTs = p.surface_temperature - p.initial_temperature
-        from scipy.special import erfc
         return dTs * erfc(x[..., 0] / (2 * np.sqrt(self.kappa() * t))) if t > 0 else 0.0 * x[..., 0]
 
     def stress_exact(self, x, t):

@@ -245,16 +245,16 @@ class InclinedPenny(ClosedUnderStress, Scene):
         L = self.L
         zone = 0.5 * L * (1.0 - math.tan(math.radians(p.scene3_dip)))
         top = p.scene3_well_standoff + p.scene3_perforation
-        across = zone * math.cos(math.radians(p.scene3_dip))
-        if p.scene3_layer >= 0.5 * across:
-            raise InputError(f"option -thm_scene3_layer = {p.scene3_layer:g} m: the first layer must be "
-                             f"thinner than half the layered zone across the fracture ({0.5 * across:.4g} m)")
         if p.scene3_dip >= 45.0 or top >= zone:
             raise InputError(f"option -thm_scene3_layer = {p.scene3_layer:g}: the layered mesh needs "
                              f"-thm_scene3_dip < 45 (got {p.scene3_dip:g}) and the perforations' tops "
                              f"({top:g} m above the fracture) below {zone:.4g} m (half the rock above "
                              "the fracture's lowest point); use -thm_scene3_layer 0 or a larger "
                              "-thm_scene3_box")
+        across = zone * math.cos(math.radians(p.scene3_dip))
+        if p.scene3_layer >= 0.5 * across:
+            raise InputError(f"option -thm_scene3_layer = {p.scene3_layer:g} m: the first layer must be "
+                             f"thinner than half the layered zone across the fracture ({0.5 * across:.4g} m)")
         wells = [tuple(w.bottom[:2]) for w in self.perforations()]
         return layeredmesh.layered_box_with_inclined_disc(
             path, L, p.scene3_radius, p.scene3_dip, size, p.scene3_fracture_size, p.scene3_layer,
