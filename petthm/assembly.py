@@ -12,10 +12,11 @@ called once per batch, and the results are contracted back:
 
 Physical gradients are mapped to the reference cell (J^-1), so every
 contraction is one BLAS matrix product with a tensor of the reference basis.
-The Jacobian's COO pattern is fixed at set-up; each re-assembly only
-computes the value array and calls MatSetValuesCOO.  Terms declared
-``constant`` (linear elasticity and its couplings) are computed once: the
-caller's value buffer keeps them (``jacobian_values(keep_constant=True)``).
+The Jacobian's COO pattern is fixed at set-up, one entry per nonzero: the
+element matrices are summed into it (``sparsity.NodePairs``) before
+MatSetValuesCOO.  Terms declared ``constant`` (linear elasticity and its
+couplings) are computed once: the caller's value buffer keeps the sums of
+blocks with constant terms only (``jacobian_values(keep_constant=True)``).
 P1 fields (gradients constant over an affine cell) take their gradients and
 the residual's flux term from the cell's physical basis gradients, computed
 once, at one point per cell.
@@ -31,7 +32,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import compat, fe
+from . import fe, sparsity
 from .context import CellContext, FacetContext, physical_gradient
 from .fields import Adjacent, Discretisation, FieldRef
 from .model import MATRIX, Model, Region
@@ -82,22 +83,6 @@ class _FacetBatch:
     weights: np.ndarray           # (nf, nq) physical weights
     normals: np.ndarray           # (nf, d)
     tabs: dict
-
-
-class _Writer:
-    """Writes consecutive pieces of the COO value sequence into ``out``."""
-
-    def __init__(self, out: np.ndarray):
-        self.out, self.pos = out, 0
-
-    def put(self, values: np.ndarray) -> None:
-        n = values.size
-        self.out[self.pos:self.pos + n] = values.reshape(-1)
-        self.pos += n
-
-    def skip(self, n: int) -> None:
-        """Leave the next ``n`` entries of the sequence as they are in ``out``."""
-        self.pos += n
 
 
 class Assembler:
@@ -209,56 +194,62 @@ class Assembler:
             batches.append(_FacetBatch(cells[sel], pts, w, normals[sel], tabs))
         return batches
 
-    # -- COO pattern ----------------------------------------------------------
-    def _block_index(self, test, trial, cells):
-        """Rows and columns of one term's entries on a batch of cells, each
-        (nc, nbF, nbG) (broadcast views: the caller copies them once)."""
-        g = self.disc.global_index
-        rows = g[self.dofs(test)[cells]]
-        cols = g[self.dofs(trial)[cells]]
-        R = np.broadcast_to(rows[:, :, None], (len(rows), rows.shape[1], cols.shape[1]))
-        return R, np.broadcast_to(cols[:, None, :], R.shape)
-
+    # -- sparsity -------------------------------------------------------------
     def _build_pattern(self):
-        """The number of COO entries of ``jacobian_values``'s order (chunk by
-        chunk, every block of a chunk, then the facet terms), from the dof
-        tables' shapes.  Constrained rows and columns keep their entries, with
-        negative indices, which PETSc's COO assembly ignores (no mask to
-        apply at every assembly); the pattern itself is made when a matrix is
-        created (``coo_pattern``) and not kept: it is 8 bytes per entry."""
+        """The terms' element values, one ``sparsity.Slab`` per cell term,
+        then per facet term and batch, and the blocks they are summed into
+        (one per pair of fields, or facet batch; made when first needed)."""
         n = self.mesh.ncells
-        self.nnz = sum(self._entries(jb.test, jb.trial, n) for jb in self.model.jacobians)
-        self.nnz += sum(self._entries(ft.field, ft.field, len(fb.cells)) for ft in self.model.facets
-                        if ft.g0 is not None for fb in self._facets[ft.boundary])
+        slabs = [sparsity.Slab((jb.test, jb.trial), self._entries(jb.test, jb.trial, n), jb.constant)
+                 for jb in self.model.jacobians]
+        slabs += [sparsity.Slab((ft.field, ft.boundary, i), self._entries(ft.field, ft.field, len(fb.cells)))
+                  for ft in self.model.facets if ft.g0 is not None
+                  for i, fb in enumerate(self._facets[ft.boundary])]
+        self.sums = sparsity.SummedBlocks(slabs, self._node_pairs)
+        self.nvalues = sum(sl.size for sl in slabs)
+        self._like = {}
 
     def _entries(self, test, trial, ncells: int) -> int:
-        """Number of COO entries of one term on ``ncells`` cells."""
+        """Number of element entries of one term on ``ncells`` cells."""
         return int(ncells) * self.dofs(test).shape[1] * self.dofs(trial).shape[1]
 
-    def _pattern_parts(self):
-        for cells in self.chunks():
-            for jb in self.model.jacobians:
-                yield self._block_index(jb.test, jb.trial, cells)
-        for ft in self.model.facets:
-            if ft.g0 is None:
-                continue
-            for fb in self._facets[ft.boundary]:
-                yield self._block_index(ft.field, ft.field, fb.cells)
+    def _node_pairs(self, key) -> sparsity.NodePairs:
+        """The block of a slab key; blocks over the same element node tables
+        share their node-pair index (``_node_tables``)."""
+        if len(key) == 2:
+            test, trial = key
+            rows, cols = self.dofs(test), self.dofs(trial)
+            tables = (self._node_tables(test), self._node_tables(trial))
+        else:
+            field, boundary, i = key
+            test = trial = field
+            rows = cols = self.dofs(field)[self._facets[boundary][i].cells]
+            tables = (boundary, i, self.disc.field(field).degree)
+        m, n = self.disc.field(test).ncomp, self.disc.field(trial).ncomp
+        block = sparsity.NodePairs(rows, cols, m, n, self.disc.nlocal, like=self._like.get(tables))
+        self._like.setdefault(tables, block)
+        return block
+
+    def _node_tables(self, ref) -> tuple:
+        """What a field reference's element dof table is made from on this
+        region: the mesh points (the elements' vertices, + edges for P2) of
+        the region's elements, of a face's, or of the rock cells next to a
+        face."""
+        kind = type(ref).__name__ if not isinstance(ref, str) else "own"
+        side = getattr(ref, "side", None)
+        return kind, side, self.disc.field(ref).degree
+
+    @property
+    def nnz(self) -> int:
+        """Number of summed Jacobian entries (one per nonzero of each block)."""
+        return self.sums.nnz
 
     def coo_pattern(self, rows: np.ndarray | None = None, cols: np.ndarray | None = None):
         """Global COO rows and columns (-1: a constrained row or column) in
         the order ``jacobian_values`` fills them, written into ``rows`` and
         ``cols`` (``nnz`` entries each) when they are given (a slice of the
         whole matrix's pattern: no intermediate copies)."""
-        if rows is None:
-            rows, cols = np.empty(self.nnz, compat.INT), np.empty(self.nnz, compat.INT)
-        pos = 0
-        for r, c in self._pattern_parts():
-            n = r.size
-            rows[pos:pos + n].reshape(r.shape)[...] = r
-            cols[pos:pos + n].reshape(c.shape)[...] = c
-            pos += n
-        return rows, cols
+        return self.sums.pattern(self.disc.global_index, rows, cols)
 
     # -- residual -------------------------------------------------------------
     def chunks(self):
@@ -319,43 +310,47 @@ class Assembler:
     # -- Jacobian -------------------------------------------------------------
     def jacobian_values(self, xl, xdl, t, shift, out: np.ndarray | None = None,
                         keep_constant: bool = False) -> np.ndarray:
-        """COO values of the (scaled) Jacobian dF/dx + shift dF/dx_dot in
-        ``coo_pattern``'s order, written into ``out`` (of ``nnz`` entries)
-        when it is given.  ``keep_constant``: the entries of
-        the ``constant`` terms are left as they are in ``out`` (the caller
-        filled it before, with the same scaling)."""
-        if keep_constant and out is None:
-            raise ValueError("keep_constant needs the buffer of an earlier assembly")
-        out = np.empty(self.nnz) if out is None else out
-        writer = _Writer(out)
+        """The (scaled) Jacobian dF/dx + shift dF/dx_dot summed per nonzero,
+        in ``coo_pattern``'s order, written into ``out`` (of ``nnz``
+        entries) when it is given.  ``keep_constant``: the ``constant``
+        terms are as in the last call (the caller knows that the scaling has
+        not changed since): their element values are not computed again, and
+        the blocks of constant terms only are left as they are in ``out``
+        (the buffer of the last call)."""
+        keep_constant = keep_constant and out is not None
+        sums = self.sums
         for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
-            for jb in self.model.jacobians:
-                if keep_constant and jb.constant:
-                    writer.skip(self._entries(jb.test, jb.trial, cells.stop - cells.start))
-                    continue
-                K = self._cell_block(jb, ctx, cells)
-                rowfac = self.inv_rscale[self.dofs(jb.test)[cells]] * self.scale(jb.trial).scale
-                writer.put((K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel())
+            for jb, slab in zip(self.model.jacobians, sums.slabs):
+                if not sums.skips(slab, keep_constant):
+                    K = self._cell_block(jb, ctx, cells)              # (nc, m, n, nbF, nbG)
+                    rowfac = self._row_factors(jb.test, jb.trial, self.dofs(jb.test)[cells])
+                    sums.store(slab, K, rowfac, cells)
+        facet_slabs = iter(sums.slabs[len(self.model.jacobians):])
         for ft in self.model.facets:
             if ft.g0 is None:
                 continue
-            sc = self.scale(ft.field)
             for fb in self._facets[ft.boundary]:
                 ctx = FacetContext(self, fb, xl, xdl, t, shift)
                 phi = fb.tabs[self.disc.field(ft.field).degree].phi
                 K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi)
-                rowfac = self.inv_rscale[self.dofs(ft.field)[fb.cells]] * sc.scale
-                writer.put((K.reshape(len(rowfac), rowfac.shape[1], -1) * rowfac[:, :, None]).ravel())
-        return out
+                rowfac = self._row_factors(ft.field, ft.field, self.dofs(ft.field)[fb.cells])
+                sums.store(next(facet_slabs), K, rowfac, slice(None))
+        return sums.sum(out if out is not None else np.zeros(self.nnz), keep_constant)
+
+    def _row_factors(self, test, trial, rowdofs) -> np.ndarray:
+        """1/(residual scale) of each row times the trial field's scale, as
+        (nc, nb, m) for element rows ``rowdofs`` (nc, nb*m)."""
+        m = self.disc.field(test).ncomp
+        return (self.inv_rscale[rowdofs] * self.scale(trial).scale).reshape(len(rowdofs), -1, m)
 
     @staticmethod
     def _mass_like(g0w, phiF, phiG):
-        """sum_q phiF_i g0w[a,b] phiG_j -> (nc, nbF, m, nbG, n)."""
+        """sum_q phiF_i g0w[a,b] phiG_j -> (nc, m, n, nbF, nbG)."""
         nc, nq, m, n = g0w.shape
         M0 = (phiF[:, :, None] * phiG[:, None, :]).reshape(nq, -1)
         K = g0w.transpose(0, 2, 3, 1).reshape(nc * m * n, nq) @ M0
-        return K.reshape(nc, m, n, phiF.shape[1], phiG.shape[1]).transpose(0, 3, 1, 4, 2)
+        return K.reshape(nc, m, n, phiF.shape[1], phiG.shape[1])
 
     def _reference_tensors(self, degF, degG):
         """Products of reference basis functions/gradients per quadrature point
@@ -391,7 +386,7 @@ class Assembler:
     def _adjacent_block(self, jb, ctx, cells):
         """K_ij = sum_q W grad phi_i . g3 . grad psi_j with psi the basis of the
         rock cell next to each fracture face (an ``Adjacent`` trial field, one
-        component): (nc, nbF, nbG)."""
+        component): (nc, 1, 1, nbF, nbG)."""
         W = self.W[cells]
         (nc, nq), d = W.shape, self.mesh.dim
         G = self.adjacent_gradients(jb.trial, cells)                       # (nc, nq or 1, d, nbG)
@@ -400,7 +395,7 @@ class Assembler:
         g = np.broadcast_to(jb.g3(ctx), (nc, nq, 1, d, 1, d))[:, :, 0, :, 0, :]
         T = (g @ G).reshape(nc, nq * d, -1)
         U = (W[:, :, None, None] * gw).transpose(0, 2, 1, 3).reshape(nc, -1, nq * d)
-        return U @ T
+        return (U @ T)[:, None, None]
 
     def _cell_block(self, jb, ctx, cells):
         if isinstance(jb.trial, Adjacent):
@@ -445,8 +440,7 @@ class Assembler:
                 g = Jinv[:, None, None, None] @ g.transpose(0, 1, 2, 4, 3, 5) @ JinvT[:, None, None, None]
                 g = (g * weights(c)[:, :, None, None, None, None]).transpose(0, 2, 3, 1, 4, 5)
             K += g.reshape(nc * m * n, -1) @ ref["3", c]
-        K = K.reshape(nc, m, n, nbF, nbG)
-        return K if m == 1 and n == 1 else K.transpose(0, 3, 1, 4, 2)      # (nc, nbF, m, nbG, n)
+        return K.reshape(nc, m, n, nbF, nbG)
 
     # -- functionals ------------------------------------------------------------
     def integrate(self, xl, integrand: Callable, t: float = 0.0) -> float:

@@ -1,0 +1,157 @@
+"""Element matrices summed per nonzero (petthm/sparsity.py) against the
+plain sum of every element entry, and the Jacobian of a coupled scene
+assembled through it against the element entries handed to PETSc as they
+are."""
+import numpy as np
+import pytest
+
+from petthm import compat
+from petthm.sparsity import NodePairs
+
+
+def _tables(rng, ne, nodes, nn, m, offsets):
+    """Element dof tables (ne, nn*m) of a field with m components at
+    ``offsets[node]`` (node-major, components consecutive)."""
+    cells = np.array([rng.choice(nodes, nn, replace=False) for _ in range(ne)])
+    base = offsets[cells]
+    return (base[:, :, None] + np.arange(m)).reshape(ne, nn * m)
+
+
+def _dense_sum(rows, cols, values, size):
+    """The element matrices added entry by entry (np.add.at), as PETSc's COO does."""
+    A = np.zeros((size, size))
+    R = np.broadcast_to(rows[:, :, None], values.shape)
+    C = np.broadcast_to(cols[:, None, :], values.shape)
+    np.add.at(A, (R.ravel(), C.ravel()), values.ravel())
+    return A
+
+
+def _summed(block, rows, cols, values, size, global_index):
+    """The block's sums as a dense matrix, values given element-major (ne, nbF, nbG)."""
+    ne, m, n = block.ne, block.m, block.n
+    v = values.reshape(ne, block.nnF, m, block.nnG, n).transpose(2, 4, 0, 1, 3).copy()
+    out = np.zeros(block.size)
+    block.add(v.ravel(), out)
+    r, c = np.empty(block.size, compat.INT), np.empty(block.size, compat.INT)
+    block.pattern(global_index, r, c)
+    assert len(set(zip(r.tolist(), c.tolist()))) == block.size, "one entry per nonzero"
+    A = np.zeros((size, size))
+    A[r, c] = out
+    return A
+
+
+@pytest.mark.parametrize("m,n", [(1, 1), (3, 3), (3, 1), (1, 2)])
+def test_sums_per_nonzero_equal_the_element_entries_added_one_by_one(m, n):
+    rng = np.random.default_rng(1)
+    nodes, ne, nnF, nnG = 12, 40, 4, 3
+    # two fields on the same points, interleaved per point as a PetscSection lays them out
+    offsets_f = np.arange(nodes) * (m + n)
+    offsets_g = offsets_f + m
+    size = nodes * (m + n)
+    rows = _tables(rng, ne, np.arange(nodes), nnF, m, offsets_f)
+    cols = _tables(rng, ne, np.arange(nodes), nnG, n, offsets_g)
+    values = rng.standard_normal((ne, nnF * m, nnG * n))
+    block = NodePairs(rows, cols, m, n, size)
+    assert block.npairs < ne * nnF * nnG                      # repeated node pairs were merged
+    ident = np.arange(size, dtype=compat.INT)
+    assert np.allclose(_summed(block, rows, cols, values, size, ident),
+                       _dense_sum(rows, cols, values, size), rtol=0, atol=1e-13)
+
+
+def test_a_shared_node_pair_index_is_used_only_where_it_reproduces_the_pairs():
+    """Two field pairs on the same element node tables share the index; a
+    block over other node tables with as many entries does not take it
+    (negative control: taking it would add entries to the wrong nonzeros)."""
+    rng = np.random.default_rng(2)
+    nodes, ne, nn = 10, 30, 3
+    off_u, off_p = np.arange(nodes) * 4, np.arange(nodes) * 4 + 3           # u (3 comps), p
+    cells = np.array([rng.choice(nodes, nn, replace=False) for _ in range(ne)])
+    u = (off_u[cells][:, :, None] + np.arange(3)).reshape(ne, 3 * nn)
+    p = off_p[cells]
+    uu = NodePairs(u, u, 3, 3, 4 * nodes)
+    up = NodePairs(u, p, 3, 1, 4 * nodes, like=uu)
+    pp = NodePairs(p, p, 1, 1, 4 * nodes, like=uu)
+    assert up.inv is uu.inv and pp.inv is uu.inv
+    other = off_p[np.array([rng.choice(nodes, nn, replace=False) for _ in range(ne)])]
+    po = NodePairs(p, other, 1, 1, 4 * nodes, like=uu)
+    assert po.inv is not uu.inv
+    values = rng.standard_normal((ne, nn, nn))
+    ident = np.arange(4 * nodes, dtype=compat.INT)
+    for block, cols in ((pp, p), (po, other)):
+        assert np.allclose(_summed(block, p, cols, values, 4 * nodes, ident),
+                           _dense_sum(p, cols, values, 4 * nodes), rtol=0, atol=1e-13)
+
+
+def test_constrained_rows_and_columns_keep_negative_indices():
+    rng = np.random.default_rng(3)
+    rows = _tables(rng, 8, np.arange(6), 3, 1, np.arange(6))
+    block = NodePairs(rows, rows, 1, 1, 6)
+    g = np.arange(6, dtype=compat.INT)
+    g[2] = -1
+    r, c = np.empty(block.size, compat.INT), np.empty(block.size, compat.INT)
+    block.pattern(g, r, c)
+    keys = block.keys
+    assert np.array_equal(r < 0, keys // 6 == 2) and np.array_equal(c < 0, keys % 6 == 2)
+
+
+def _element_level_matrix(problem, values):
+    """The Jacobian from the assemblers' element entries (``values``: per
+    assembler, per slab) handed to PETSc as they are (every element entry
+    its own COO entry, PETSc summing them), plus the point and diagonal
+    entries as ``Problem`` adds them."""
+    g = problem.disc.global_index
+    rows, cols, vals = [], [], []
+    for a in problem.assemblers.values():
+        for slab in a.sums.slabs:
+            b = a.sums.blocks[slab.key][0]
+            if len(slab.key) == 2:
+                rt, ct = a.dofs(slab.key[0]), a.dofs(slab.key[1])
+            else:
+                field, boundary, i = slab.key
+                rt = ct = a.dofs(field)[a._facets[boundary][i].cells]
+            rt = rt.reshape(b.ne, b.nnF, b.m).transpose(2, 0, 1)[:, None, :, :, None]
+            ct = ct.reshape(b.ne, b.nnG, b.n).transpose(2, 0, 1)[None, :, :, None, :]
+            r, c = np.broadcast_arrays(g[rt], g[ct])
+            rows.append(r.ravel())
+            cols.append(c.ravel())
+            vals.append(values[a.sums][slab])
+    n = sum(a.nnz for a in problem.assemblers.values())
+    rest = problem._jvals[n:]
+    extra = [(p.coo_rows, p.coo_cols) for p in problem.points] + [(problem._diagonal, problem._diagonal)]
+    rows += [r for r, _ in extra]
+    cols += [c for _, c in extra]
+    vals.append(rest)
+    M = compat.coo_matrix(problem.dm, np.concatenate(rows), np.concatenate(cols))
+    compat.coo_set_values(M, np.concatenate(vals))
+    M.assemble()
+    return M
+
+
+@pytest.mark.parametrize("scene,opts", [
+    ("coupled_mms", dict(thm_fe_degree=2, thm_mesh_size=0.25)),
+    ("heat_mms", dict(thm_mms_dim=3, thm_fe_degree=2, thm_mesh_size=0.5)),
+    ("lauwerier", dict(thm_fe_degree=1, thm_lauwerier_fracture_size=10.0)),
+])
+def test_the_summed_jacobian_equals_the_element_entries_summed_by_petsc(tmp_path, monkeypatch, scene, opts):
+    from conftest import build_problem
+    from petthm.sparsity import SummedBlocks
+    p = build_problem(tmp_path, scene, **opts)
+    rng = np.random.default_rng(4)
+    x = p.X.duplicate()
+    x.setArray(rng.standard_normal(x.getLocalSize()) * 0.1)
+    J = p.create_matrix()
+    values = {}
+    summed = SummedBlocks.sum
+
+    def spy(self, out, keep_constant):                 # the element values of the full assembly
+        values.setdefault(self, {k: v.copy() for k, v in self.values.items()})
+        return summed(self, out, keep_constant)
+    monkeypatch.setattr(SummedBlocks, "sum", spy)
+    p.ijacobian(None, 0.5, x, x, 3.0, J, J)
+    monkeypatch.setattr(SummedBlocks, "sum", summed)
+    p.ijacobian(None, 0.5, x, x, 3.0, J, J)           # the second keeps the constant blocks
+    M = _element_level_matrix(p, values)
+    blocks = sum(len(a.sums.blocks) for a in p.assemblers.values())
+    M.axpy(-1.0, J)
+    print(scene, "blocks", blocks, "difference", M.norm(), "of", J.norm())
+    assert M.norm() <= 1e-12 * J.norm()
