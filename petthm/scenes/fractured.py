@@ -11,15 +11,82 @@ imposed by tying the matrix nodes on the walls to the fracture unknowns
 """
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import materials as mt
 from .. import meshing
 from ..builders import ModelBuilder
 from ..monitors import Balances, FractureWells, TemperatureRange, Worst, fracture_balances
-from ..params import CELSIUS
+from ..params import CELSIUS, param
 from ..errors import InputError
 from .base import Monitor
+
+
+#: ``auto`` first rock layer of a layered mesh: this fraction of the rock's
+#: diffusion length sqrt(kappa t) at the scene's first output time (issue 16 item 2)
+AUTO_LAYER_FRACTION = 0.5
+
+
+@dataclass(frozen=True)
+class FirstLayer:
+    """A ``-thm_*_layer`` value: the first rock layer's thickness in m on
+    each side of the fracture (0: no layered mesh), or ``auto`` (None)."""
+    thickness: float | None
+
+    def __str__(self) -> str:
+        return "auto" if self.thickness is None else f"{self.thickness:g}"
+
+    @property
+    def layered(self) -> bool:
+        return self.thickness is None or self.thickness > 0
+
+    def resolve(self, diffusivity: float, t_first: float) -> float:
+        """The thickness in m: as given, or ``AUTO_LAYER_FRACTION``
+        sqrt(kappa t_first), kappa the rock's thermal diffusivity
+        lambda/(rho c) (physics.md section 7): the conduction layer's depth
+        at the first time the scene reports."""
+        if self.thickness is not None:
+            return self.thickness
+        return AUTO_LAYER_FRACTION * math.sqrt(diffusivity * t_first)
+
+
+def first_layer_option(option: str):
+    """The parser of a ``-thm_*_layer`` option: ``auto`` or a thickness >= 0 (m)."""
+    def parse(text) -> FirstLayer:
+        word = str(text).strip().lower()
+        if word == "auto":
+            return FirstLayer(None)
+        try:
+            value = float(word)
+        except ValueError:
+            value = -1.0
+        if not (value >= 0 and math.isfinite(value)):
+            raise InputError(f"option -{option} = {text} is not auto or a thickness >= 0 (m)")
+        return FirstLayer(value)
+    return parse
+
+
+def first_layer_param(option: str, default: float, mesh: str, when: str):
+    """The declaration of a ``-thm_*_layer`` option: ``mesh`` says how the
+    layered mesh is made, ``when`` what ``auto``'s time is."""
+    return param(default, "m", f"first rock layer on each side of the fracture (0: {mesh}); a layered mesh "
+                 f"grows from it by -{option}_growth; ~0.5 sqrt(kappa t) resolves the rock's thermal layer "
+                 f"from time t on; auto: {AUTO_LAYER_FRACTION:g} sqrt(kappa t) at {when}",
+                 parse=first_layer_option(option))
+
+
+def first_layer(scene, value: FirstLayer, t_first: float) -> float:
+    """A scene's first layer in m (``value``; auto: from its rock's diffusivity
+    and ``t_first``), said once when it is computed."""
+    p = scene.p
+    thickness = value.resolve(p.conductivity / p.rho_c, t_first)
+    if value.thickness is None:
+        print(f"layered mesh: first rock layer {thickness:.3g} m ({AUTO_LAYER_FRACTION:g} sqrt(kappa t) at "
+              f"t = {t_first:g} s)", flush=True)
+    return thickness
 
 
 #: the wells and initial state of the Scene 1 family (injector, producer, rock at 100 degC)

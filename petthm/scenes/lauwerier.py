@@ -21,8 +21,8 @@ from ..monitors import FractureWells, hit
 from ..params import CELSIUS, param
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
-from .fractured import (SCENE1_WELLS, WellsMonitor, far_sides, heat_wells_monitor, rigid_fracture_physics,
-                        strip_with_fracture, transmissivity)
+from .fractured import (SCENE1_WELLS, FirstLayer, WellsMonitor, far_sides, first_layer, first_layer_param,
+                        heat_wells_monitor, rigid_fracture_physics, strip_with_fracture, transmissivity)
 
 
 @dataclass(frozen=True)
@@ -34,10 +34,8 @@ class LauwerierParams:
                                    "and 4 sqrt(kappa t_final); a width below 4 sqrt(kappa t_final), where "
                                    "the rock's far side would feel the cooling, is refused)", lo=0.0)
     lauwerier_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
-    lauwerier_layer: float = param(0.0, "m", "first rock layer on each side of the fracture of a layered "
-                                   "mesh (fracture cells extruded in layers growing by "
-                                   "-thm_lauwerier_layer_growth; ~0.5 sqrt(kappa t) resolves the thermal "
-                                   "layer from time t on); 0: a graded unstructured mesh", lo=0.0)
+    lauwerier_layer: FirstLayer = first_layer_param("thm_lauwerier_layer", 0.0, "a graded unstructured mesh",
+                                                    "the start of the outlet error's range (1e4 s)")
     lauwerier_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
     lauwerier_dim: int = param(2, "-", "2: plane strain (H = 1 m); 3: a slab of height H with line wells",
                                choices=(2, 3))
@@ -205,9 +203,10 @@ class Lauwerier(Scene):
     def generate_mesh(self, path, size):
         p = self.p
         L, W, H = p.lauwerier_length, self.width, p.lauwerier_height
-        if p.lauwerier_layer:
+        if p.lauwerier_layer.layered:
+            layer = first_layer(self, p.lauwerier_layer, OUTLET_ERROR_FROM[0])
             return meshing.layered_slab_with_fracture(path, (L,) if p.lauwerier_dim == 2 else (L, H), W,
-                                                      p.lauwerier_fracture_size, p.lauwerier_layer,
+                                                      p.lauwerier_fracture_size, layer,
                                                       p.lauwerier_layer_growth)
         if p.lauwerier_dim == 2:
             return strip_with_fracture(path, L, W, size, p.lauwerier_fracture_size)

@@ -25,8 +25,9 @@ from ..monitors import Balances, FractureWells, Worst, hit
 from ..params import CELSIUS, param
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
-from .fractured import (SCENE1_WELLS, WellsMonitor, balances_of, far_sides, heat_wells_monitor,
-                        rigid_fracture_physics, strip_with_fracture, transmissivity)
+from .fractured import (SCENE1_WELLS, FirstLayer, WellsMonitor, balances_of, far_sides, first_layer,
+                        first_layer_param, heat_wells_monitor, rigid_fracture_physics, strip_with_fracture,
+                        transmissivity)
 from .lauwerier import SCENE1_ROCK
 
 FRACTURE_HEAT = mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT)
@@ -41,11 +42,8 @@ class Scene1Params:
     scene1_margin: float = param(150.0, "m", "rock beyond the fracture in every direction", lo=0.0,
                                  lo_open=True)
     scene1_fracture_size: float = param(1.0, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
-    scene1_layer: float = param(0.0, "m", "first rock layer on each side of the fracture of a layered mesh "
-                                "(the line through the fracture extruded in layers growing by "
-                                "-thm_scene1_layer_growth; ~0.5 sqrt(kappa t) resolves the rock's thermal "
-                                "layer from time t on: 0.05 m from 1e4 s); 0: a graded unstructured mesh",
-                                lo=0.0)
+    scene1_layer: FirstLayer = first_layer_param("thm_scene1_layer", 0.0, "a graded unstructured mesh",
+                                                 "the first output time (the profile at 1e8 s)")
     scene1_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
 
 
@@ -112,9 +110,10 @@ class RigidFracture(Scene):
     def generate_mesh(self, path, size):
         p = self.p
         L, M = p.scene1_length, p.scene1_margin
-        if p.scene1_layer:
+        if p.scene1_layer.layered:
+            layer = first_layer(self, p.scene1_layer, min(self.hit_times()))
             return meshing.layered_box_with_segment(path, (-M, L + M), M, (0.0, L), size,
-                                                    p.scene1_fracture_size, p.scene1_layer,
+                                                    p.scene1_fracture_size, layer,
                                                     p.scene1_layer_growth, 0.5 * M)
         fr = [meshing.Fracture("segment", p0=(0.0, 0.0), p1=(L, 0.0), size=p.scene1_fracture_size)]
         return meshing.box_with_fractures(path, [L + 2 * M, 2 * M], size, fr, grading_distance=0.5 * M,

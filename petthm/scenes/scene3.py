@@ -38,7 +38,7 @@ from ..monitors import Worst, contact_node_checks, contact_node_fields
 from ..params import param
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
 from .contact import OPEN_TRACTION, contact_solver_defaults
-from .fractured import ClosedUnderStress, balances_of, tf_range
+from .fractured import ClosedUnderStress, FirstLayer, balances_of, first_layer, first_layer_param, tf_range
 from .friction import slip_columns
 
 #: (T0 in degC, compressive in-situ stress in Pa) of the paper's cases 1, 2, 3
@@ -67,10 +67,8 @@ class Scene3Params:
                                         lo=0.0, lo_open=True)
     scene3_fracture_size: float = param(20.0, "m", "mesh size on the fracture", lo=0.0, lo_open=True)
     scene3_well_size: float = param(5.0, "m", "mesh size along the perforations", lo=0.0, lo_open=True)
-    scene3_layer: float = param(0.0, "m", "thickness across the fracture of the first rock layer on each "
-                                "side (layered mesh parallel to the fracture, growing by "
-                                "-thm_scene3_layer_growth; ~0.5 sqrt(kappa t) of the first output time: 10 m "
-                                "for 10 years); 0: unstructured tetrahedra", lo=0.0)
+    scene3_layer: FirstLayer = first_layer_param("thm_scene3_layer", 0.0, "unstructured tetrahedra",
+                                                 "the first output time (10 years)")
     scene3_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0,
                                        lo_open=True)
     scene3_far_pressure: str = param("fixed", "-", "the box faces: fixed (pm = p0, fluid crosses them) or "
@@ -230,34 +228,35 @@ class InclinedPenny(ClosedUnderStress, Scene):
     def generate_mesh(self, path, size):
         p = self.p
         L = self.L
-        if p.scene3_layer > 0:
-            return self._layered_mesh(path, size or L / 4)
+        if p.scene3_layer.layered:
+            layer = first_layer(self, p.scene3_layer, (self.hit_times() or [self.final_time])[0])
+            return self._layered_mesh(path, size or L / 4, layer)
         fr = [meshing.Fracture("disc", center=(0.0, 0.0, 0.0), radius=p.scene3_radius, dip=p.scene3_dip,
                                strike=1, size=p.scene3_fracture_size)]
         return meshing.box_with_fractures(path, [2 * L] * 3, size or L / 4, fr, grading_distance=L,
                                           origin=(-L, -L, -L), well_size=p.scene3_well_size,
                                           well_lines=[w.segment() for w in self.perforations()])
 
-    def _layered_mesh(self, path, size):
-        """Layers parallel to the fracture (``layeredmesh``), the perforations'
-        ends on layer boundaries."""
+    def _layered_mesh(self, path, size, layer):
+        """Layers parallel to the fracture (``layeredmesh``), the first ``layer``
+        m thick, the perforations' ends on layer boundaries."""
         p = self.p
         L = self.L
         zone = 0.5 * L * (1.0 - math.tan(math.radians(p.scene3_dip)))
         top = p.scene3_well_standoff + p.scene3_perforation
         if p.scene3_dip >= 45.0 or top >= zone:
-            raise InputError(f"option -thm_scene3_layer = {p.scene3_layer:g}: the layered mesh needs "
+            raise InputError(f"option -thm_scene3_layer = {p.scene3_layer}: the layered mesh needs "
                              f"-thm_scene3_dip < 45 (got {p.scene3_dip:g}) and the perforations' tops "
                              f"({top:g} m above the fracture) below {zone:.4g} m (half the rock above "
                              "the fracture's lowest point); use -thm_scene3_layer 0 or a larger "
                              "-thm_scene3_box")
         across = zone * math.cos(math.radians(p.scene3_dip))
-        if p.scene3_layer >= 0.5 * across:
-            raise InputError(f"option -thm_scene3_layer = {p.scene3_layer:g} m: the first layer must be "
+        if layer >= 0.5 * across:
+            raise InputError(f"option -thm_scene3_layer = {layer:g} m: the first layer must be "
                              f"thinner than half the layered zone across the fracture ({0.5 * across:.4g} m)")
         wells = [tuple(w.bottom[:2]) for w in self.perforations()]
         return layeredmesh.layered_box_with_inclined_disc(
-            path, L, p.scene3_radius, p.scene3_dip, size, p.scene3_fracture_size, p.scene3_layer,
+            path, L, p.scene3_radius, p.scene3_dip, size, p.scene3_fracture_size, layer,
             p.scene3_layer_growth, wells=wells, well_size=p.scene3_well_size,
             well_heights=(p.scene3_well_standoff, top))
 

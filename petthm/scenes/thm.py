@@ -34,7 +34,8 @@ from ..params import CELSIUS, param
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
 from .contact import OPEN_TRACTION, contact_solver_defaults, fracture_normal
-from .fractured import ClosedUnderStress, WellsMonitor, heat_wells_monitor, transmissivity
+from .fractured import (ClosedUnderStress, FirstLayer, WellsMonitor, first_layer, first_layer_param,
+                        heat_wells_monitor, transmissivity)
 from .friction import slip_columns
 
 
@@ -47,10 +48,8 @@ class Scene2Params:
     scene2_box: float = param(3.0, "-", "domain half-size / R (the rock beyond the fracture)", lo=1.5)
     scene2_fracture_size: float = param(10.0, "m", "mesh size on the fracture", lo=0.0, lo_open=True)
     scene2_well_size: float = param(5.0, "m", "mesh size at the wells", lo=0.0, lo_open=True)
-    scene2_layer: float = param(0.5, "m", "thickness of the first rock layer on each side of the fracture "
-                                "(layered mesh, growing by -thm_scene2_layer_growth); "
-                                "0: unstructured tetrahedra",
-                                lo=0.0)
+    scene2_layer: FirstLayer = first_layer_param("thm_scene2_layer", 0.5, "unstructured tetrahedra",
+                                                 "the first output time (1e3 s: 0.0185 m in granite)")
     scene2_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
     scene2_lumped_heat: bool = param(True, "-", "row-sum lumping of the rock heat capacity and the wall "
                                      "exchange (keeps Tf and Tm within [Tinj, T0] on thin layers)")
@@ -183,9 +182,10 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         p = self.p
         L = self.L
         size = size or L / 4
-        if p.scene2_layer > 0:
+        if p.scene2_layer.layered:
+            layer = first_layer(self, p.scene2_layer, (self.hit_times() or [self.final_time])[0])
             return meshing.layered_half_box_with_disc(path, L, p.scene2_radius, size, p.scene2_fracture_size,
-                                                      p.scene2_layer, p.scene2_layer_growth,
+                                                      layer, p.scene2_layer_growth,
                                                       list(self.wells_at()),
                                                       p.scene2_well_size)
         fr = [meshing.Fracture("disc", center=(0.0, 0.0, 0.0), radius=p.scene2_radius,

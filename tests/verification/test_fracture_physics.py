@@ -139,6 +139,30 @@ def test_layered_mesh_resolves_the_wall_layer(tmp_path):
     assert layered["balance_max"]["energy_balance"] <= 1e-6
 
 
+def test_auto_layer_is_sized_from_the_first_output_time(tmp_path):
+    """Issue 16 item 2: -thm_lauwerier_layer auto makes the first layer
+    0.5 sqrt(kappa t) at 1e4 s (the start of the outlet error's range),
+    kappa = lambda / (rho c) of the rock given, as the largest first layer
+    (``meshing.layer_heights`` scales the layers down to fill the rock): the
+    nodes nearest the fracture (y = W, the rock from 0 to 2W) are that far
+    from it, and the run says so."""
+    import meshio
+
+    from petthm.meshing import layer_heights
+    proc, s = run_petthm("lauwerier", tmp_path, "-thm_lauwerier_fracture_size", 4, "-thm_mesh_size", 20,
+                         "-thm_lauwerier_layer", "auto", "-thm_rock_conductivity", 2.0,
+                         "-thm_rock_density", 2500, "-thm_rock_heat_capacity", 1000, "-thm_rock_porosity", 0,
+                         "-thm_final_time", 1e4)
+    want = 0.5 * np.sqrt(2.0 / (2500 * 1000.0) * 1e4)
+    assert s["provenance"]["parameters"]["-thm_lauwerier_layer"] == "auto"
+    assert f"first rock layer {want:.3g} m" in proc.stdout
+    y = meshio.read(tmp_path / "mesh.msh").points[:, 1]
+    W = 0.5 * y.max()
+    gaps = np.abs(y - W)
+    first = np.min(gaps[gaps > 1e-9])       # the layers are scaled down together to fill W exactly
+    assert first == pytest.approx(layer_heights(want, 1.3, W)[0], rel=1e-9) and want / 1.3 < first <= want
+
+
 def test_scene1_layered_mesh_with_leakoff(tmp_path):
     """Issue 16: rigid_fracture on its layered mesh (-thm_scene1_layer, first
     layer 0.05 m under 10 m wide cells) with 1D leakoff: the rock's water
