@@ -336,7 +336,8 @@ class Assembler:
                 K = self._mass_like(fb.weights[:, :, None, None] * ft.g0(ctx), phi, phi)
                 rowfac = self._row_factors(ft.field, ft.field, self.dofs(ft.field)[fb.cells])
                 sums.store(next(facet_slabs), K, rowfac, slice(None))
-        return sums.sum(out if out is not None else np.zeros(self.nnz), keep_constant)
+        # (``sum`` zeroes every block it fills: a new buffer need not be zero)
+        return sums.sum(out if out is not None else np.empty(self.nnz), keep_constant)
 
     def _row_factors(self, test, trial, rowdofs) -> np.ndarray:
         """1/(residual scale) of each row times the trial field's scale, as

@@ -169,6 +169,11 @@ class Scene:
         """Times the time stepper must land on exactly (reference comparisons)."""
         return []
 
+    def first_output_time(self) -> float:
+        """The first time the scene reports on (its first hit time, else the
+        final time): what ``-thm_*_layer auto`` resolves."""
+        return min(self.hit_times(), default=self.final_time)
+
 
 REGISTRY: dict[str, type] = {}
 

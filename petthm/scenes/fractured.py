@@ -78,10 +78,10 @@ def first_layer_param(option: str, default: float, mesh: str, when: str):
                  parse=first_layer_option(option))
 
 
-def first_layer(scene, value: FirstLayer, t_first: float) -> float:
+def first_layer(scene, value: FirstLayer) -> float:
     """A scene's first layer in m (``value``; auto: from its rock's diffusivity
-    and ``t_first``), said once when it is computed."""
-    p = scene.p
+    and ``scene.first_output_time()``), said once when it is computed."""
+    p, t_first = scene.p, scene.first_output_time()
     thickness = value.resolve(p.conductivity / p.rho_c, t_first)
     if value.thickness is None:
         print(f"layered mesh: first rock layer {thickness:.3g} m ({AUTO_LAYER_FRACTION:g} sqrt(kappa t) at "

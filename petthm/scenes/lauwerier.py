@@ -204,7 +204,7 @@ class Lauwerier(Scene):
         p = self.p
         L, W, H = p.lauwerier_length, self.width, p.lauwerier_height
         if p.lauwerier_layer.layered:
-            layer = first_layer(self, p.lauwerier_layer, OUTLET_ERROR_FROM[0])
+            layer = first_layer(self, p.lauwerier_layer)
             return meshing.layered_slab_with_fracture(path, (L,) if p.lauwerier_dim == 2 else (L, H), W,
                                                       p.lauwerier_fracture_size, layer,
                                                       p.lauwerier_layer_growth)
@@ -227,6 +227,10 @@ class Lauwerier(Scene):
 
     def hit_times(self):
         return [1e6, 1e7, 1e8]
+
+    def first_output_time(self):
+        """The outlet error is counted from 1e4 s on."""
+        return OUTLET_ERROR_FROM[0]
 
     def build(self, mesh, degree):
         p = self.p

@@ -111,7 +111,7 @@ class RigidFracture(Scene):
         p = self.p
         L, M = p.scene1_length, p.scene1_margin
         if p.scene1_layer.layered:
-            layer = first_layer(self, p.scene1_layer, min(self.hit_times()))
+            layer = first_layer(self, p.scene1_layer)
             return meshing.layered_box_with_segment(path, (-M, L + M), M, (0.0, L), size,
                                                     p.scene1_fracture_size, layer,
                                                     p.scene1_layer_growth, 0.5 * M)

@@ -229,7 +229,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
         p = self.p
         L = self.L
         if p.scene3_layer.layered:
-            layer = first_layer(self, p.scene3_layer, (self.hit_times() or [self.final_time])[0])
+            layer = first_layer(self, p.scene3_layer)
             return self._layered_mesh(path, size or L / 4, layer)
         fr = [meshing.Fracture("disc", center=(0.0, 0.0, 0.0), radius=p.scene3_radius, dip=p.scene3_dip,
                                strike=1, size=p.scene3_fracture_size)]

@@ -183,7 +183,7 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         L = self.L
         size = size or L / 4
         if p.scene2_layer.layered:
-            layer = first_layer(self, p.scene2_layer, (self.hit_times() or [self.final_time])[0])
+            layer = first_layer(self, p.scene2_layer)
             return meshing.layered_half_box_with_disc(path, L, p.scene2_radius, size, p.scene2_fracture_size,
                                                       layer, p.scene2_layer_growth,
                                                       list(self.wells_at()),
