@@ -29,6 +29,11 @@ if SCALAR != np.float64:  # pragma: no cover
     raise ImportError("petthm needs a real, double-precision PETSc build")
 
 
+#: SNES's reason for a NaN function norm (renamed DIVERGED_FUNCTION_NANORINF in PETSc 3.23)
+SNES_DIVERGED_NAN = getattr(PETSc.SNES.ConvergedReason, "DIVERGED_FNORM_NAN", None) \
+    or PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_NANORINF
+
+
 def version_string() -> str:
     """'3.18.5'-style PETSc version of the loaded library."""
     return ".".join(str(v) for v in VERSION)

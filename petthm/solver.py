@@ -23,6 +23,7 @@ from .errors import InputError
 from .fieldsplit import VIFieldSplit  # noqa: F401  (-pc_python_type petthm.solver.VIFieldSplit)
 from .courant import FrontStepLimit
 from .problem import Problem
+from .viconvergence import VIConvergence
 from .stepcontrol import RECOVERY, StepControl, error_control_defaults  # noqa: F401  (re-exported)
 
 SOLVER_DEFAULTS = {
@@ -235,6 +236,8 @@ class TimeStepper:
                              f"{', '.join(self.problem.model.bounds)}: use vinewtonrsls or vinewtonssls")
         lower, upper = self.problem.variable_bounds()
         snes.setVariableBounds(lower, upper)
+        if snes.getType() == "vinewtonrsls":     # its default test ignores -snes_stol
+            VIConvergence().install(snes)
         self.updates.hooks.append(BiactiveRelease(lower))
 
     def _post_step(self, ts):
