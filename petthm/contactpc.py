@@ -49,6 +49,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from . import compat, pmg
+from .errors import InputError
 from .fieldsplit import mode_vectors, orthonormal_nullspace, served_rows
 from .glue import glue_maps, glued_basis
 from .nodeblocks import block_inverse
@@ -154,6 +155,7 @@ class ContactNullspacePC:
         for r in modes:
             r.destroy()
         self.ksp.setFromOptions()
+        refuse_vector_interpolation(prefix, AZ)
         self.ksp.setUp()
 
     def apply(self, pc, x, y):
@@ -213,6 +215,25 @@ class ContactNullspacePC:
 
 
 _WARNED: set = set()
+
+
+#: BoomerAMG's vector (nodal) interpolation, which needs an operator of nodal blocks
+VEC_INTERP = "pc_hypre_boomeramg_vec_interp_variant"
+
+
+def refuse_vector_interpolation(prefix: str, A: PETSc.Mat) -> None:
+    """A one-line error, not hypre's segmentation fault, for BoomerAMG's
+    vector interpolation on the glued elasticity: its basis mixes a node's
+    components (block size 1), and hypre 2.26 crashed on it (docs/solvers.md,
+    stop 31: partial_opening with ``-vi_fieldsplit_mech_contact_pc_type hypre
+    -vi_fieldsplit_mech_contact_pmg false ..._vec_interp_variant 3``)."""
+    if A.getBlockSize() != 1:
+        return
+    bad = sorted(k for k in PETSc.Options().getAll() if k.startswith(prefix) and k.endswith(VEC_INTERP))
+    if bad:
+        raise InputError(f"option -{bad[0]}: BoomerAMG's vector interpolation needs nodal blocks, and the "
+                         "glued elasticity of the contact preconditioner has none (block size 1); "
+                         "leave the option out")
 
 
 def warn_once(message: str) -> None:

@@ -4,6 +4,7 @@ import sys
 
 import numpy as np
 import pytest
+from petsc4py import PETSc
 
 from conftest import ROOT, run_petthm
 
@@ -337,6 +338,22 @@ def test_a_block_recipe_that_leaves_out_a_field_is_an_error(tmp_path):
                          f"{ROOT}/options/solvers/block.opts", "-vi_groups", "mech=u", check=False)
     msg = _one_line_error(proc)
     assert "-vi_groups = mech=u leaves out the field(s) lam" in msg
+
+
+@pytest.mark.skipif(not PETSc.Sys.hasExternalPackage("hypre"), reason="PETSc without hypre")
+def test_boomeramg_vector_interpolation_on_the_glued_elasticity_is_an_error(tmp_path):
+    """hypre's vector interpolation on the contact preconditioner's glued
+    elasticity (block size 1) crashed with a segmentation fault; now a
+    one-line error naming the option.  Negative control: BoomerAMG without it runs."""
+    opts = ("-thm_contact_dim", 2, "-options_file", f"{ROOT}/options/solvers/block.opts",
+            "-vi_fieldsplit_mech_contact_pc_type", "hypre", "-vi_fieldsplit_mech_contact_pmg", "false")
+    proc, _ = run_petthm("contact_patch", tmp_path / "vec", *opts,
+                         "-vi_fieldsplit_mech_contact_pc_hypre_boomeramg_vec_interp_variant", 3, check=False)
+    msg = _one_line_error(proc)
+    assert "-vi_fieldsplit_mech_contact_pc_hypre_boomeramg_vec_interp_variant" in msg, msg
+    assert "block size 1" in msg, msg
+    _, summary = run_petthm("contact_patch", tmp_path / "plain", *opts)
+    assert summary["status"] == "completed"
 
 
 def test_a_singleton_run_isolates_open_mpi_and_a_launched_one_does_not():
