@@ -5,17 +5,39 @@ Abate & Valko 2004), vectorised over the contour nodes.
 ``leakoff_outlet_temperature``: verification.md section 2, fracture heat
 transport with a uniform leakoff fraction m (matrix advection on or off).
 ``lauwerier_temperature``: verification.md section 1.
+``erfc``: the complementary error function over arrays, from the C
+library's (``math.erfc``): the scenes that need only it do not import
+scipy.special (0.06 s of a small run's start, docs/performance.md).
+``increasing_root``: the root of a function that changes sign once on each
+of several brackets, by bisection vectorised over the brackets.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+erfc = np.vectorize(math.erfc, otypes=[float])
+
+
+def increasing_root(f, lo, hi, iterations: int = 80) -> np.ndarray:
+    """x in [lo, hi] (arrays, one bracket each) with f(x) = 0, where f (vectorised)
+    is negative at lo and positive at hi and changes sign once in between:
+    ``iterations`` bisections (80 halve a bracket of width pi/2 below 1e-24,
+    past double precision: the result is the last representable midpoint)."""
+    lo, hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        positive = f(mid) > 0
+        hi = np.where(positive, mid, hi)
+        lo = np.where(positive, lo, mid)
+    return 0.5 * (lo + hi)
 
 
 def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T0, Ti):
     """Lauwerier (1955) fracture temperature (verification.md section 1):
     T0 + (Ti - T0) erfc(lambda x / (rho_f c_f q sqrt(kappa (t - t_d)))) U(t - t_d),
     t_d = a x / q, kappa = lambda / (rho C); q per metre of fracture height."""
-    from scipy.special import erfc
     x = np.asarray(x, dtype=float)
     kappa = conductivity / rho_c
     td = aperture * x / q

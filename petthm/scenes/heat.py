@@ -209,7 +209,7 @@ class HeatErfc(Scene):
         z = x[..., 0]
         if t <= 0:
             return np.full(z.shape, T0)
-        from scipy.special import erfc
+        from ..analytic import erfc
         return T0 + (Ts - T0) * erfc(z / (2 * np.sqrt(kappa * t)))
 
     def build(self, mesh, degree):

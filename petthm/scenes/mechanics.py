@@ -170,7 +170,7 @@ class ThermalStress(Scene):
         return p.rock_conductivity / (p.rock_density * p.rock_heat_capacity)
 
     def dT_exact(self, x, t):
-        from scipy.special import erfc
+        from ..analytic import erfc
         p = self.p
         dTs = p.surface_temperature - p.initial_temperature
         return dTs * erfc(x[..., 0] / (2 * np.sqrt(self.kappa() * t))) if t > 0 else 0.0 * x[..., 0]

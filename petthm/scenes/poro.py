@@ -301,15 +301,14 @@ class Mandel(Scene):
         return B, nu, nu_u, G, consolidation(p)
 
     def roots(self, n=200):
-        from scipy.optimize import brentq
+        """The first n roots of tan(x) = k x, k = (1 - nu)/(nu_u - nu) > 1: one
+        in each (i pi, i pi + pi/2), where tan x - k x goes from < 0 to +inf."""
+        from ..analytic import increasing_root
         B, nu, nu_u, G, c = self._constants()
         k = (1 - nu) / (nu_u - nu)
-        f = lambda x: np.tan(x) - k * x  # noqa: E731
-        out = []
-        for i in range(n):
-            lo, hi = i * np.pi + 1e-12, i * np.pi + np.pi / 2 - 1e-12
-            out.append(brentq(f, lo if i else 1e-9, hi))
-        return np.array(out)
+        i = np.arange(n)
+        lo = np.where(i > 0, i * np.pi + 1e-12, 1e-9)
+        return increasing_root(lambda x: np.tan(x) - k * x, lo, i * np.pi + np.pi / 2 - 1e-12)
 
     def t_ref(self):
         return self.p.mandel_a ** 2 / self._constants()[4]
