@@ -47,9 +47,7 @@ def median_ms(f, repeat):
 def main():
     run = Run(make_scene(args.scene))
     _, problem, *_ = run.setup(run.build_mesh())
-    problem.J, problem._jvals = None, None           # the set-up made them: again, from nothing
-    for a in problem.assemblers.values():
-        a._build_pattern()
+    problem.discard_matrix()                         # the set-up made it: again, from nothing
     t0 = time.perf_counter()
     J = problem.create_matrix()
     t_matrix = time.perf_counter() - t0

@@ -209,6 +209,11 @@ class Assembler:
         self.nvalues = sum(sl.size for sl in slabs)
         self._like = {}
 
+    def discard_pattern(self) -> None:
+        """Forget the blocks' node pairs and sums: the next Jacobian or
+        pattern makes them again (``Problem.discard_matrix``)."""
+        self._build_pattern()
+
     def _entries(self, test, trial, ncells: int) -> int:
         """Number of element entries of one term on ``ncells`` cells."""
         return int(ncells) * self.dofs(test).shape[1] * self.dofs(trial).shape[1]

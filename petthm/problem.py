@@ -228,6 +228,15 @@ class Problem:
             self.J = compat.coo_matrix(self.dm, rows, cols, copy=False)
         return self.J
 
+    def discard_matrix(self) -> None:
+        """Forget the Jacobian matrix, its values and every assembler's
+        sparsity pattern, so that the next ``create_matrix`` makes them from
+        nothing (benchmarks/scene_assembly.py times that).  The old matrix is
+        only dropped, not destroyed: whoever still holds it keeps it."""
+        self.J, self._jvals, self._jvals_constant = None, None, False
+        for a in self.assemblers.values():
+            a.discard_pattern()
+
     @staticmethod
     def _coo_pattern(assemblers, extra=()) -> tuple[np.ndarray, np.ndarray]:
         """The COO rows and columns of ``assemblers`` (each writes its slice

@@ -155,3 +155,27 @@ def test_the_summed_jacobian_equals_the_element_entries_summed_by_petsc(tmp_path
     M.axpy(-1.0, J)
     print(scene, "blocks", blocks, "difference", M.norm(), "of", J.norm())
     assert M.norm() <= 1e-12 * J.norm()
+
+
+def test_a_discarded_matrix_is_made_again_from_nothing(tmp_path):
+    """``Problem.discard_matrix`` (benchmarks/scene_assembly.py): the next
+    matrix is a new one, with new node pairs, and the same Jacobian."""
+    from conftest import build_problem
+    p = build_problem(tmp_path, "contact_patch", thm_contact_dim=2)
+    xl, xdl = (a.copy() for a in p.local_arrays(p.X, 0.0))
+
+    def jacobian():
+        J = p.create_matrix()
+        compat.coo_set_values(J, p.jacobian_values(xl, xdl, 0.0, 1.0))
+        J.assemble()
+        return J
+    J1 = jacobian()
+    blocks = {k: b for a in p.assemblers.values() for k, (b, _) in a.sums.blocks.items()}
+    assert p.create_matrix() is J1                                   # kept until discarded
+    p.discard_matrix()
+    J2 = jacobian()
+    assert J2 is not J1
+    again = {k: b for a in p.assemblers.values() for k, (b, _) in a.sums.blocks.items()}
+    assert again.keys() == blocks.keys() and all(again[k] is not blocks[k] for k in blocks)
+    J2.axpy(-1.0, J1)
+    assert J2.norm() <= 1e-14 * J1.norm()
