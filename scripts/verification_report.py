@@ -174,6 +174,11 @@ STABILITY = [
                "-thm_terzaghi_pressure_degree", 1, "-thm_biot_stabilization", 1.0),
               checks={"p_overshoot_max_rel_load": 5e-2},
               test="tests/verification/test_poroelastic.py::test_terzaghi_first_step_pressure_oscillation"),
+    Stability("first rock layer 0.22 m (Scene 3 coarse, layered: Newton on its round-off floor)",
+              "inclined_penny", (*_COARSE3, "-thm_scene3_layer", 0.223, "-thm_scene3_layer_growth", 2,
+                                 "-thm_dt_growth", 1.0),
+              bounds=_SCENE3_BOUNDS,
+              test="tests/verification/test_scene3.py::test_scene3_thin_first_layer_starts"),
     Stability("water at 250 degC in a fracture (Lauwerier, mu(T))", "lauwerier",
               ("-thm_initial_temperature", 250, "-thm_fluid_viscosity", "water", "-thm_final_time", 1e6,
                "-thm_mesh_size", 20, "-thm_lauwerier_fracture_size", 5)),     # coarse: higher cell Peclet
