@@ -224,9 +224,9 @@ VEC_INTERP = "pc_hypre_boomeramg_vec_interp_variant"
 def refuse_vector_interpolation(prefix: str, A: PETSc.Mat) -> None:
     """A one-line error, not hypre's segmentation fault, for BoomerAMG's
     vector interpolation on the glued elasticity: its basis mixes a node's
-    components (block size 1), and hypre 2.26 crashed on it (docs/solvers.md,
-    stop 31: partial_opening with ``-vi_fieldsplit_mech_contact_pc_type hypre
-    -vi_fieldsplit_mech_contact_pmg false ..._vec_interp_variant 3``)."""
+    components (block size 1), and hypre 2.26 crashed on it (docs/solvers.md:
+    Scene 2 in stop 31; partial_opening with ``-vi_fieldsplit_mech_contact_pc_type
+    hypre -vi_fieldsplit_mech_contact_pmg false ..._vec_interp_variant 3`` in stop 32)."""
     if A.getBlockSize() != 1:
         return
     bad = sorted(k for k in PETSc.Options().getAll() if k.startswith(prefix) and k.endswith(VEC_INTERP))
