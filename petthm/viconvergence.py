@@ -19,7 +19,8 @@ proviso keeps a diverging iteration from passing: fracture_inflation's VI
 Newton once ran off to |F| = 1e32, where |x| is so large that any update is
 "small" (measured: without it the run accepted such states and failed).
 Everything else is the VI default's: NaN, atol, rtol times the initial norm,
-the function-evaluation limit.
+the function-evaluation limit.  With -snes_rtol 0 the proviso admits no state
+but |F| = 0, so the step-length test is off.
 """
 from __future__ import annotations
 
