@@ -121,7 +121,7 @@ class Assembler:
         self._ref_cache = {}
         self._basis_gradients = {}
         self._facets = {ft.boundary: self._facet_batches(ft.boundary, 2 * pmax) for ft in self.model.facets}
-        self._build_pattern()
+        self.build_pattern()
 
     @staticmethod
     def default_inv_rscale(disc, scales) -> np.ndarray:
@@ -195,10 +195,12 @@ class Assembler:
         return batches
 
     # -- sparsity -------------------------------------------------------------
-    def _build_pattern(self):
+    def build_pattern(self):
         """The terms' element values, one ``sparsity.Slab`` per cell term,
         then per facet term and batch, and the blocks they are summed into
-        (one per pair of fields, or facet batch; made when first needed)."""
+        (one per pair of fields, or facet batch; made when first needed).
+        Called again, it forgets the blocks' node pairs and sums, which the
+        next Jacobian or pattern then makes afresh (``Problem.discard_matrix``)."""
         n = self.mesh.ncells
         slabs = [sparsity.Slab((jb.test, jb.trial), self._entries(jb.test, jb.trial, n), jb.constant)
                  for jb in self.model.jacobians]
@@ -208,11 +210,6 @@ class Assembler:
         self.sums = sparsity.SummedBlocks(slabs, self._node_pairs)
         self.nvalues = sum(sl.size for sl in slabs)
         self._like = {}
-
-    def discard_pattern(self) -> None:
-        """Forget the blocks' node pairs and sums: the next Jacobian or
-        pattern makes them again (``Problem.discard_matrix``)."""
-        self._build_pattern()
 
     def _entries(self, test, trial, ncells: int) -> int:
         """Number of element entries of one term on ``ncells`` cells."""

@@ -235,7 +235,7 @@ class Problem:
         only dropped, not destroyed: whoever still holds it keeps it."""
         self.J, self._jvals, self._jvals_constant = None, None, False
         for a in self.assemblers.values():
-            a.discard_pattern()
+            a.build_pattern()
 
     @staticmethod
     def _coo_pattern(assemblers, extra=()) -> tuple[np.ndarray, np.ndarray]:

@@ -35,20 +35,17 @@ Reason = PETSc.SNES.ConvergedReason
 
 class VIConvergence:
     """SNESConvergedDefault_VI with the -snes_stol test (module docstring);
-    install with ``install(snes)``.  ``last`` is the reason of the latest call
-    (the tests read it)."""
+    install with ``install(snes)``."""
 
     def __init__(self):
         self.ttol = 0.0
         self.floor_tol = 0.0
-        self.last = Reason.CONVERGED_ITERATING
 
     def install(self, snes: PETSc.SNES) -> None:
         snes.setConvergenceTest(self)
 
     def __call__(self, snes: PETSc.SNES, it: int, norms) -> int:
-        self.last = self.reason(snes, it, *norms)
-        return self.last
+        return self.reason(snes, it, *norms)
 
     def reason(self, snes: PETSc.SNES, it: int, xnorm: float, ynorm: float, fnorm: float) -> int:
         """The reason for the norms of iteration ``it``: |x|, the update |dx|

@@ -119,7 +119,7 @@ def _split_vector_problem(tmp_path, declared_constant: str):
              dataclasses.replace(jb, g0=None, constant=declared_constant == "g3")]
     p.model.jacobians[:] = terms
     p.region(MATRIX).model.jacobians[:] = terms
-    p.region(MATRIX)._build_pattern()
+    p.region(MATRIX).build_pattern()
     return p
 
 

@@ -31,7 +31,7 @@ def test_contact_jacobian_check_detects_a_missing_block(tmp_path):
     asm = problem.region(FRACTURE_DUAL)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians
                               if not (j.test == "lam" and j.trial == Trace("u", Side.PLUS))]
-    asm._build_pattern()
+    asm.build_pattern()
     problem.J = None
     err = jacobian_fd_error(problem, t=0.5, shift=1.0, eps=1e-6)
     assert err > 1e-3, err

@@ -47,7 +47,7 @@ def test_jacobian_check_detects_a_missing_coupling(tmp_path):
     from petthm.model import FRACTURE
     asm = problem.region(FRACTURE)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians if not (j.test == "Tf" and j.trial == "pf")]
-    asm._build_pattern()
+    asm.build_pattern()
     problem.J = None
     err = jacobian_fd_error(problem, t=1e5, shift=1e-4, eps=1e-6)
     print("without the Tf-pf block", err)
@@ -70,7 +70,7 @@ def test_wall_conduction_blocks_match_finite_differences(tmp_path, degree):
     assert len(walls) == 2
     err = jacobian_fd_block_errors(problem, t=1e5, shift=1e-4, eps=(1e-6, 1e-4))[("Tf", "Tm")]
     asm.model.jacobians[:] = [j for j in asm.model.jacobians if j not in walls]
-    asm._build_pattern()
+    asm.build_pattern()
     problem.J = None
     without = jacobian_fd_block_errors(problem, t=1e5, shift=1e-4, eps=(1e-6, 1e-4))[("Tf", "Tm")]
     print(f"P{degree} Tf-Tm block: {err:.1e}, without the wall blocks {without:.1e}")

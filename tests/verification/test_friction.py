@@ -44,7 +44,7 @@ def test_friction_jacobian_check_detects_a_missing_block(tmp_path):
     from petthm.model import FRACTURE_NODAL
     asm = problem.region(FRACTURE_NODAL)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians if not (j.test == "tau" and j.trial == "lam")]
-    asm._build_pattern()
+    asm.build_pattern()
     problem.J = None
     err = jacobian_fd_block_errors(problem, t=0.5, shift=1e-3, eps=1e-6)
     assert err[("tau", "lam")] > 1e-2, err
