@@ -69,8 +69,8 @@ class ContactNullspacePC:
     ``-contact_ksp_type preonly -contact_pc_type gamg``)."""
 
     def __init__(self):
-        self.maps = self.A = self.Z = self.ksp = self._coarse = None
-        self.B = self.C = self.D = self.e_inv = None
+        self.maps = self.Z = self.ksp = self._coarse = None
+        self.B = self.C = self.D = self.e_inv = self.A_pt = self.pt_A = None
         self._own_maps = False
         self._work: dict = {}
 
@@ -89,19 +89,21 @@ class ContactNullspacePC:
                       "may fail on a closed fracture that cuts the domain (docs/solvers.md)")
         self._own_maps = maps is None
         self.maps = glue_maps(K, context.contact(), rows) if maps is None else maps
-        self.A = K.createSubMatrix(self.maps.iu, self.maps.iu)
-        self._eliminate(K)
-        self.Z = glued_basis(self.maps, self.A)
-        AZ = compat.ptap(self.A, self.Z)
+        A = K.createSubMatrix(self.maps.iu, self.maps.iu)
+        self._eliminate(K, A)
+        self._contact_products(A)
+        self.Z = glued_basis(self.maps, A)
+        AZ = compat.ptap(A, self.Z)
         self._set_inner(pc, AZ, context, self.maps.u_full, self.Z)
         AZ.destroy()
-        self._work = {"up": self.A.createVecLeft(), "t": self.A.createVecLeft(), "u": self.A.createVecLeft(),
-                      "ru": self.A.createVecLeft(),
+        self._work = {"up": A.createVecLeft(), "t": A.createVecLeft(), "u": A.createVecLeft(),
+                      "ru": A.createVecLeft(),
                       "zr": self.Z.createVecRight(), "v": self.Z.createVecRight(),
                       "s": self.maps.b.duplicate(), "lam": self.maps.b.duplicate(),
                       "xl": self.maps.b.duplicate()}
+        A.destroy()                              # the apply needs only A P^T and P A
 
-    def _eliminate(self, K):
+    def _eliminate(self, K, A):
         """Eliminate the contact rows the glue does not hold (open nodes, the
         semismooth rows in transition of ``vinewtonssls``, the tau rows of
         slipping nodes) exactly: with D the contact rows' own block (per
@@ -118,9 +120,21 @@ class ContactNullspacePC:
         self.e_inv = block_inverse(self.D, m.glued.getArray(readonly=True) == 0.0)
         Bs = self.e_inv.matMult(self.B)
         CB = self.C.matMult(Bs)
-        self.A.axpy(-1.0, CB, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        A.axpy(-1.0, CB, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         for obj in (Bs, CB):
             obj.destroy()
+
+    def _contact_products(self, A):
+        """A P^T and P A, with P (``maps.pt``) the contact rows' normals: the
+        two products of the glue's apply with the elasticity touch only the
+        fracture's unknowns (P^T s lives on them; P reads only their rows), so
+        they are formed once here instead of two products with all of A per
+        application."""
+        pt = self.maps.pt
+        ptT = pt.transpose(PETSc.Mat())           # (transpose() alone would turn pt in place)
+        self.A_pt = A.matMult(ptT)
+        self.pt_A = pt.matMult(A)
+        ptT.destroy()
 
     def _set_inner(self, pc, AZ, context, u_full, Z=None):
         """The solve of the (glued) elasticity AZ on the u unknowns
@@ -172,15 +186,15 @@ class ContactNullspacePC:
         w["ru"].aypx(-1.0, xu)                                   # r_u - C_E D_EE^-1 r_E
         w["s"].getArray()[:] = g * xl.getArray(readonly=True) / _safe(m.b.getArray(readonly=True))
         m.pt.multTranspose(w["s"], w["up"])                      # 1. u_p = P (r_lam / b)
-        self.A.mult(w["up"], w["t"])
+        self.A_pt.mult(w["s"], w["t"])                           #    (A u_p = (A P^T) s)
         w["t"].aypx(-1.0, w["ru"])                               # 2. r_u - A u_p
         self.Z.multTranspose(w["t"], w["zr"])
         self.ksp.solve(w["zr"], w["v"])
         self.Z.mult(w["v"], w["u"])
         w["u"].axpy(1.0, w["up"])                                #    u = Z v + u_p
-        self.A.mult(w["u"], w["t"])
-        w["t"].aypx(-1.0, w["ru"])                               # 3. the force the glue carries
-        m.pt.mult(w["t"], w["lam"])
+        m.pt.mult(w["ru"], w["lam"])                             # 3. the force the glue carries,
+        self.pt_A.mult(w["u"], w["s"])                           #    P (r_u - A u)
+        w["lam"].axpy(-1.0, w["s"])
         w["lam"].getArray()[:] *= g / _safe(m.c.getArray(readonly=True))
         self.B.mult(w["u"], w["s"])                              #    and the eliminated rows:
         self.D.multAdd(w["lam"], w["s"], w["s"])                 #    D_EE^-1 (r_E - B_E u - D_EG x_G)
@@ -199,13 +213,13 @@ class ContactNullspacePC:
         for v in self._work.values():
             v.destroy()
         self._work = {}
-        for obj in (self.A, self.Z, self._coarse, self.B, self.C, self.D, self.e_inv):
+        for obj in (self.Z, self._coarse, self.B, self.C, self.D, self.e_inv, self.A_pt, self.pt_A):
             if obj is not None:
                 obj.destroy()
-        self._coarse = self.B = self.C = self.D = self.e_inv = None
+        self._coarse = self.B = self.C = self.D = self.e_inv = self.A_pt = self.pt_A = None
         if self.maps is not None and self._own_maps:
             self.maps.destroy()
-        self.maps = self.A = self.Z = None
+        self.maps = self.Z = None
 
     def reset(self, pc):
         self._release()

@@ -240,13 +240,14 @@ class VIFieldSplit:
     which unknowns it holds (``served_rows``), so a split can be given
     ``contactpc.ContactNullspacePC``.
 
-    Every split s after the first is preconditioned by an approximation of
-    its Schur complement with respect to the mechanics of the first split
+    Every split s after the mechanics (the first split that holds u,
+    ``mechanics_split``) is preconditioned by an approximation of its Schur
+    complement with respect to the mechanics
     (``split_block``; the "pmat" of its index set: the block of a
     multiplicative split, the preconditioner of the Schur complement with
     ``-vi_pc_fieldsplit_type schur -vi_pc_fieldsplit_schur_precondition
-    user``): S_s = A_ss - A_s,lam G A_u,s when the first split holds u and
-    lam (what its fields see of the contact when the glue carries their
+    user``): S_s = A_ss - A_s,lam G A_u,s when the mechanics split holds
+    lam too (what its fields see of the contact when the glue carries their
     face loads; ``-vi_contact_schur faces|all|off``, ``contact_schur``), plus the model's
     preconditioner blocks (the fixed-stress term of Biot;
     ``-vi_fixed_stress 0`` leaves it out)."""
@@ -273,20 +274,21 @@ class VIFieldSplit:
         self.inner.setOperators(A, P)
         self.inner.setType("fieldsplit")
         self.inner.setFieldSplitIS(*[(s.name, s.iset) for s in splits])
-        maps = self._contact_maps(context, P, splits)
+        first = mechanics_split(context, splits)
+        maps = self._contact_maps(context, P, splits[first]) if first is not None else None
         # the splits' KSPs exist once their index sets are given (the Schur
         # type reports them only after its set-up: ask before the options make it one)
-        for split, ksp in zip(splits, self.inner.getFieldSplitSubKSP()):
-            own_maps = maps if split is splits[0] else None
+        for k, (split, ksp) in enumerate(zip(splits, self.inner.getFieldSplitSubKSP())):
+            own_maps = maps if k == first else None
             ksp.getPC().setAttr(SPLIT, (weakref.ref(context), split.rows, own_maps))
         opts = PETSc.Options(self.inner.getOptionsPrefix())
         extra = context.problem.preconditioner_blocks() if opts.getBool("fixed_stress", True) else None
         schur = contact_schur(opts)
         glue = maps if schur != "off" else None
         faces = context.problem.face_load_blocks() if glue is not None and schur == "faces" else None
-        mech = context.holds("u", splits[0].rows)
-        for split in splits[1:]:                                # their preconditioning blocks
-            Sp = split_block(P, split, rows, context, glue, extra, faces) if mech else None
+        after = splits[first + 1:] if first is not None else []
+        for split in after:                                     # their preconditioning blocks
+            Sp = split_block(P, split, rows, context, glue, extra, faces)
             if Sp is not None:
                 split.iset.compose("pmat", Sp)
                 self._owned.append(Sp)
@@ -295,16 +297,13 @@ class VIFieldSplit:
             self.inner.setFromOptions()          # the splits read theirs in the set-up
             self.inner.setUp()
 
-    def _contact_maps(self, context, P, splits):
-        """The contact maps of the first split when it holds u and lam."""
-        if not splits:
-            return None
-        first = splits[0].rows
-        if not (context.holds("u", first) and context.holds("lam", first)):
+    def _contact_maps(self, context, P, split):
+        """The contact maps of the mechanics split when it holds lam too."""
+        if not context.holds("lam", split.rows):
             return None
         from .glue import glue_maps
-        K = P.createSubMatrix(splits[0].iset, splits[0].iset)
-        maps = glue_maps(K, context.contact(), first)
+        K = P.createSubMatrix(split.iset, split.iset)
+        maps = glue_maps(K, context.contact(), split.rows)
         K.destroy()
         self._owned.append(maps)
         return maps
@@ -350,6 +349,17 @@ CONTACT_SCHUR = {"faces": "faces", "1": "all", "true": "all", "all": "all", "off
                  "false": "off"}
 
 
+def mechanics_split(context: SolverContext, splits: list[Split]) -> int | None:
+    """The position of the first split that holds u (None without one).
+    The splits after it are preconditioned by their Schur complements with
+    respect to it (``split_block``); those before it are solved first
+    without one: a field whose equation does not see u (the rock
+    temperature: its thermal stress loads u, u does not enter its balance)
+    placed before the mechanics makes that coupling exact in the
+    multiplicative sweep (docs/solvers.md, "Heat before the mechanics")."""
+    return next((k for k, s in enumerate(splits) if context.holds("u", s.rows)), None)
+
+
 def contact_schur(opts: PETSc.Options) -> str:
     """``-vi_contact_schur``: the load the contact-Schur term of ``split_block``
     takes: ``all`` (default: every term of the u rows, the rock's body
@@ -367,8 +377,8 @@ def contact_schur(opts: PETSc.Options) -> str:
 
 def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None,
                 extra: PETSc.Mat | None = None, faces: PETSc.Mat | None = None) -> PETSc.Mat | None:
-    """The preconditioning block of ``split`` when the first split holds
-    the mechanics (see ``VIFieldSplit``): an approximation of its Schur
+    """The preconditioning block of ``split`` when it comes after the
+    mechanics split (see ``VIFieldSplit``): an approximation of its Schur
     complement A_ss - A_s,m K^-1 A_m,s with respect to the mechanics m,
 
         S = A_ss - A_s,lam G A_u,s  [- A_s,u' diag(A_u'u')^-1 A_u',s]  + E_ss

@@ -128,3 +128,40 @@ def test_the_pc_needs_the_tangential_glue(tmp_path, monkeypatch):
         context.destroy()
     print("FGMRES iterations without the tangential glue", its)
     assert its > 20
+
+
+def test_the_glue_products_equal_those_with_the_whole_elasticity(tmp_path):
+    """The apply's two products with the elasticity A are formed once at the
+    set-up on the fracture's unknowns alone (A P^T and P A): they give A (P^T s)
+    and P (A u) for any s, u; the PC keeps no copy of the whole A."""
+    problem, J = closed_jacobian(tmp_path, 0.05)
+    context = SolverContext(problem)
+    pc = PETSc.PC().create()
+    pc.setOperators(J)
+    pc.setType("python")
+    ctx = ContactNullspacePC()
+    pc.setPythonContext(ctx)
+    serve(pc, context)
+    pc.setUp()
+    m = ctx.maps
+    assert not np.any(m.glued.getArray(readonly=True) == 0.0)      # closed: nothing eliminated, A = K_uu
+    A = J.createSubMatrix(m.iu, m.iu)
+    s, u = m.b.duplicate(), A.createVecRight()
+    s.setRandom()
+    u.setRandom()
+    up, whole, part = A.createVecRight(), A.createVecLeft(), A.createVecLeft()
+    m.pt.multTranspose(s, up)
+    A.mult(up, whole)
+    ctx.A_pt.mult(s, part)
+    scale = whole.norm(PETSc.NormType.INFINITY)
+    assert np.allclose(part.getArray(), whole.getArray(), rtol=0, atol=1e-12 * scale)
+    Au, lam_whole, lam_part = A.createVecLeft(), m.b.duplicate(), m.b.duplicate()
+    A.mult(u, Au)
+    m.pt.mult(Au, lam_whole)
+    ctx.pt_A.mult(u, lam_part)
+    scale = lam_whole.norm(PETSc.NormType.INFINITY)
+    assert scale > 0
+    assert np.allclose(lam_part.getArray(), lam_whole.getArray(), rtol=0, atol=1e-12 * scale)
+    assert not hasattr(ctx, "A")
+    pc.destroy()
+    context.destroy()

@@ -181,3 +181,55 @@ def test_vi_fieldsplit_inclined_crack(tmp_path):
     assert s["status"] == "completed" and s["law_error"] <= 1e-8
     assert s["slip_centre"] == pytest.approx(ref["slip_centre"], rel=1e-6)
     assert s["slip_l2_error"] == pytest.approx(ref["slip_l2_error"], rel=1e-4)
+
+
+def _schur_terms(tmp_path, monkeypatch, groups):
+    """Scene 2 (coarse, P1 u) at t = 0 under VIFieldSplit with ``-vi_groups
+    groups``: the splits that were given a Schur-complement block
+    (``fieldsplit.split_block``, composed as their preconditioning matrix)."""
+    from petsc4py import PETSc
+    from petthm import fieldsplit
+    opts = dict(zip(SCENE2_COARSE[::2], SCENE2_COARSE[1::2]))
+    problem = build_problem(tmp_path, "penny_impermeable", **{k[1:]: v for k, v in opts.items()})
+    J = problem.create_matrix()
+    Xdot = problem.X.duplicate()
+    Xdot.set(0.0)
+    problem.ijacobian(None, 0.0, problem.X, Xdot, 1e-3, J, J)
+    given = []
+
+    def recorded(P, split, *args, **kwargs):
+        S = split_block(P, split, *args, **kwargs)
+        if S is not None:
+            given.append(split.name)
+        return S
+    split_block = fieldsplit.split_block
+    monkeypatch.setattr(fieldsplit, "split_block", recorded)
+    PETSc.Options().setValue("vi_groups", groups)
+    context = fieldsplit.SolverContext(problem)
+    pc = PETSc.PC().create()
+    pc.setOperators(J)
+    pc.setType("python")
+    pc.setPythonContext(fieldsplit.VIFieldSplit())
+    fieldsplit.serve(pc, context)
+    try:
+        pc.setUp()
+        return given
+    finally:
+        PETSc.Options().delValue("vi_groups")
+        pc.destroy()
+        context.destroy()
+
+
+def test_splits_after_the_mechanics_get_their_schur_terms(tmp_path, monkeypatch):
+    """The splits after the mechanics split get their Schur-complement terms
+    wherever the mechanics split stands: with the heat fields first (solved
+    before the mechanics, whose thermal stress they load), the fracture
+    pressure still gets the glue's term (its storage through the contact);
+    the heat splits before the mechanics keep their own blocks.  Control:
+    the default order, where every split after the first gets one."""
+    heat_first = _schur_terms(tmp_path / "heat_first", monkeypatch, "Tf=Tf,Tm=Tm,mech=u+lam+tau,pf=pf")
+    print("heat first: splits with a Schur term", heat_first)
+    assert heat_first == ["pf"]
+    default = _schur_terms(tmp_path / "default", monkeypatch, "mech=u+lam+tau,pf=pf,Tf=Tf,Tm=Tm")
+    print("mechanics first:", default)
+    assert default == ["pf", "Tf", "Tm"]
