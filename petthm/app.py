@@ -281,7 +281,7 @@ class Run:
                               **(error_control_defaults(control) if run.dt_control == "error" else {}))
         scene_defaults = serial_plane_direct(scene_defaults, mesh.dim, self.comm.size, bool(model.bounds))
         propose_defaults(solver_defaults_by_size(scene_defaults, model.has("u"), problem.X.getSize(),
-                                                 run.direct_max_unknowns))
+                                                 run.direct_max_unknowns, scene.block_recipe()))
         self._pop("setup", st, t0)
         self.problem = problem
         return disc, problem, control, rs, setup.monitor

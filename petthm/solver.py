@@ -71,7 +71,7 @@ def direct_solver_defaults(comm) -> dict[str, str]:
 #: ``solver_defaults_by_size`` for large problems with displacement; a test keeps the two equal
 BLOCK_RECIPE = {
     "ksp_type": "fgmres",
-    "ksp_rtol": "1e-10",
+    "ksp_rtol": "1e-6",
     "ksp_max_it": "500",
     "ksp_gmres_restart": "100",
     "pc_type": "python",
@@ -87,14 +87,15 @@ BLOCK_RECIPE = {
 
 
 def solver_defaults_by_size(scene_defaults: dict[str, str], has_displacement: bool, unknowns: int,
-                            direct_max: int) -> dict[str, str]:
+                            direct_max: int, block: dict[str, str] | None = None) -> dict[str, str]:
     """The scene's solver defaults, with the block preconditioner in place of
     its linear solver when the problem has displacement and more than
     ``direct_max`` unknowns (-thm_direct_max_unknowns): a direct solve's
-    memory and time grow faster than the problem."""
+    memory and time grow faster than the problem.  ``block``: the scene's
+    changes to ``BLOCK_RECIPE`` (``Scene.block_recipe``)."""
     if not has_displacement or unknowns <= direct_max:
         return scene_defaults
-    return dict(scene_defaults, **BLOCK_RECIPE)
+    return {**scene_defaults, **BLOCK_RECIPE, **(block or {})}
 
 
 def serial_plane_direct(defaults: dict[str, str], dim: int, ranks: int, bounded: bool) -> dict[str, str]:

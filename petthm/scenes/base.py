@@ -165,6 +165,11 @@ class Scene:
         (the user's options still win)."""
         return {}
 
+    def block_recipe(self) -> dict[str, str]:
+        """This scene's changes to the block preconditioner that the size rule
+        proposes (``solver.BLOCK_RECIPE``; the user's options still win)."""
+        return {}
+
     def hit_times(self) -> list[float]:
         """Times the time stepper must land on exactly (reference comparisons)."""
         return []

@@ -64,15 +64,20 @@ def test_contact_schur_takes_the_face_loads_alone(tmp_path):
     and thermal-strain body loads of the tied wall nodes, which the
     contact's recovery map takes for face loads: the control) the linear
     solves fail and steps are rejected (measured: 3 of 7, 500 Krylov
-    iterations)."""
+    iterations).  With the heat splits before the mechanics (Scene 3's
+    order, ``Scene.block_recipe``) Tf keeps its own block, and ``all``
+    completes as well."""
     common = ("-options_file", f"{ROOT}/options/scenes/coupled_mms.opts", "-thm_coupled_mms_state", "closed",
               *BLOCK)
+    heat_first = ("-vi_groups", "Tf=Tf,Tm=Tm,mech=u+lam+tau,pm=pm,pf=pf", "-vi_contact_schur", "all")
     runs = {}
     for mode in ("faces", "all"):
         _, runs[mode] = run_petthm("coupled_mms", tmp_path / mode, *common, "-vi_contact_schur", mode)
+    _, runs["heat_first"] = run_petthm("coupled_mms", tmp_path / "heat_first", *common, *heat_first)
     print({m: (s["steps"], s["rejected_steps"], s["ksp_iterations"]) for m, s in runs.items()})
-    assert runs["faces"]["status"] == "completed" and runs["faces"]["rejected_steps"] == 0
-    assert runs["faces"]["ksp_iterations"] / runs["faces"]["snes_iterations"] <= 110
+    for ok in ("faces", "heat_first"):
+        assert runs[ok]["status"] == "completed" and runs[ok]["rejected_steps"] == 0
+        assert runs[ok]["ksp_iterations"] / runs[ok]["snes_iterations"] <= 110
     assert runs["all"]["rejected_steps"] >= 2
 
 
@@ -146,3 +151,20 @@ def test_large_problems_get_the_block_preconditioner(tmp_path):
     assert effective["large"]["pc_type"] == "python" and effective["large"]["ksp_type"] == "fgmres"
     assert effective["mine"]["pc_type"] == "lu"
     assert small["opening_centre"] == pytest.approx(large["opening_centre"], rel=1e-8)
+
+
+def test_a_scene_changes_the_block_recipe():
+    """Above the size threshold the scene's changes go over BLOCK_RECIPE
+    (Scene 3: the heat fields first); below it nothing of the recipe is
+    proposed."""
+    from petthm.scenes import load
+    from petthm.scenes.base import REGISTRY
+    from petthm.solver import BLOCK_RECIPE, solver_defaults_by_size
+    load("inclined_penny")
+    order = REGISTRY["inclined_penny"].block_recipe(None)
+    assert order["vi_groups"].startswith("Tf=Tf,Tm=Tm,mech=")
+    big = solver_defaults_by_size({"pc_type": "lu"}, True, 10**6, 50000, order)
+    assert big["vi_groups"] == order["vi_groups"] and big["pc_type"] == BLOCK_RECIPE["pc_type"]
+    plain = solver_defaults_by_size({"pc_type": "lu"}, True, 10**6, 50000)
+    assert plain["vi_groups"] == BLOCK_RECIPE["vi_groups"]
+    assert solver_defaults_by_size({"pc_type": "lu"}, True, 10, 50000, order) == {"pc_type": "lu"}
