@@ -356,7 +356,7 @@ def mechanics_split(context: SolverContext, splits: list[Split]) -> int | None:
     without one: a field whose equation does not see u (the rock
     temperature: its thermal stress loads u, u does not enter its balance)
     placed before the mechanics makes that coupling exact in the
-    multiplicative sweep (docs/solvers.md, "Heat before the mechanics")."""
+    multiplicative sweep (docs/solvers.md, "Scene 3 at the default resolution")."""
     return next((k for k, s in enumerate(splits) if context.holds("u", s.rows)), None)
 
 
