@@ -200,8 +200,24 @@ class InclinedPenny(ClosedUnderStress, Scene):
         exactly; Tf keeps its own block (its Schur term with respect to the
         mechanics, through the wall nodes tied into it, tripled the count).
         One step of 2e6 s at the default resolution: 180 Krylov iterations
-        against 321 with the mechanics first."""
-        return {"vi_groups": "Tf=Tf,Tm=Tm,mech=u+lam+tau,pm=pm,pf=pf"}
+        against 321 with the mechanics first.
+
+        Tf by ILU(0) (block Jacobi with ILU(0) per rank in parallel): at the
+        0.2-year steps the fracture's heat transport crosses many cells per
+        step, and one AMG cycle on it fails (the linear solve reached 500
+        iterations at dt = 6e6 s); with ILU(0) it converges (381 Krylov
+        iterations in 7 Newton).  Tf lives on the fracture surface only, so
+        its blocks stay small.
+
+        One Chebyshev step on the P2 level of the glued elasticity's
+        p-multigrid (three elsewhere): that level's products are most of a
+        Krylov iteration's cost here, and one step costs ~10 % more
+        iterations for ~25 % less time (case 2, side by side: the first 12
+        steps 136 s against 175 s, four 0.2-year steps 155 s against 205 s)."""
+        return {"vi_groups": "Tf=Tf,Tm=Tm,mech=u+lam+tau,pm=pm,pf=pf",
+                "vi_fieldsplit_Tf_pc_type": "bjacobi",
+                "vi_fieldsplit_Tf_sub_pc_type": "ilu",
+                "vi_fieldsplit_mech_contact_mg_levels_ksp_max_it": "1"}
 
     def hit_times(self):
         """10, 20 and 30 years (the paper's Figs. 8-10), where the fields are written."""
