@@ -26,6 +26,7 @@ from petsc4py import PETSc
 
 from . import compat, probes
 from .errors import OPTION_ERRORS, InputError, petsc_option_errors
+from .sweep import LowerSweep
 
 #: the attribute of a PC through which ``solver.TimeStepper`` gives a Python
 #: PC the ``SolverContext`` it serves (a weak reference)
@@ -253,7 +254,7 @@ class VIFieldSplit:
     ``-vi_fixed_stress 0`` leaves it out)."""
 
     def __init__(self):
-        self.inner = None
+        self.inner = self.sweep = None
         self._owned: list = []
 
     def setUp(self, pc):
@@ -295,7 +296,13 @@ class VIFieldSplit:
         with petsc_option_errors(f"the options of the block recipe (-{self.inner.getOptionsPrefix()}*)",
                                  OPTION_ERRORS):
             self.inner.setFromOptions()          # the splits read theirs in the set-up
+            lower = _lower_sweep(opts) and len(splits) > 2
+            if lower:                            # the sweep below; PETSc sets up the splits only
+                self.inner.setFieldSplitType(PETSc.PC.CompositeType.ADDITIVE)
             self.inner.setUp()
+        if lower:
+            self.sweep = LowerSweep(P, [s.iset for s in splits], self.inner.getFieldSplitSubKSP(),
+                                    [s.name for s in splits])
 
     def _contact_maps(self, context, P, split):
         """The contact maps of the mechanics split when it holds lam too."""
@@ -334,6 +341,9 @@ class VIFieldSplit:
         return out
 
     def reset(self, pc):
+        if self.sweep is not None:
+            self.sweep.destroy()
+            self.sweep = None
         if self.inner is not None:
             self.inner.destroy()
             self.inner = None
@@ -342,7 +352,10 @@ class VIFieldSplit:
         self._owned = []
 
     def apply(self, pc, x, y):
-        self.inner.apply(x, y)
+        if self.sweep is not None:
+            self.sweep.apply(x, y)
+        else:
+            self.inner.apply(x, y)
 
 
 CONTACT_SCHUR = {"faces": "faces", "1": "all", "true": "all", "all": "all", "off": "off", "0": "off",
@@ -358,6 +371,15 @@ def mechanics_split(context: SolverContext, splits: list[Split]) -> int | None:
     placed before the mechanics makes that coupling exact in the
     multiplicative sweep (docs/solvers.md, "Scene 3 at the default resolution")."""
     return next((k for k, s in enumerate(splits) if context.holds("u", s.rows)), None)
+
+
+def _lower_sweep(opts: PETSc.Options) -> bool:
+    """Whether the splits are swept by ``sweep.LowerSweep``: the
+    multiplicative type (PCFIELDSPLIT's default) unless
+    ``-vi_lower_sweep 0`` asks for PETSc's own sweep (the same
+    preconditioner; it multiplies whole row blocks)."""
+    kind = opts.getString("pc_fieldsplit_type", "multiplicative").lower()
+    return kind == "multiplicative" and opts.getBool("lower_sweep", True)
 
 
 def contact_schur(opts: PETSc.Options) -> str:
