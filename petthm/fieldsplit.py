@@ -463,12 +463,14 @@ def split_block(P: PETSc.Mat, split: Split, rows: np.ndarray, context, maps=None
         full.destroy()
     else:
         Asu = P.createSubMatrix(split.iset, iu)
-        Auu = P.createSubMatrix(iu, iu)
-        dinv = Auu.getDiagonal()
+        diag = P.getDiagonal()                               # diag(A_uu): no copy of the u block
+        sub = diag.getSubVector(iu)
+        dinv = sub.copy()
+        diag.restoreSubVector(iu, sub)
         dinv.reciprocal()
         Aus.diagonalScale(L=dinv)
         terms.append((-1.0, Asu.matMult(Aus)))
-        for obj in (Asu, Auu, dinv):
+        for obj in (Asu, diag, dinv):
             obj.destroy()
     for a, T in terms:
         S.axpy(a, T, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
