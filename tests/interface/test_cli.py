@@ -244,6 +244,27 @@ def test_a_step_cut_by_rejections_grows_back_to_the_schedule(growth):
     assert np.allclose(cut[10:], plain[10:])             # back on the schedule
 
 
+def test_a_hit_time_is_reached_without_a_sliver_step():
+    """A hit time (an output time) closer than two steps is reached in two
+    equal steps, and the steps after it are the schedule's again, also when
+    a landing step was rejected.  Seen on Scene 3: 0.2-year steps left 6 500 s
+    to 20 years, that sliver's first try failed (a preconditioner kept from
+    the long steps), and the growth restarted from the sliver at x1.1 (68
+    steps back to 0.2 years); in a constant schedule the step stayed cut for
+    the rest of the run."""
+    from petthm.solver import StepControl
+    c = StepControl(final_time=100.0, dt_initial=10.0, growth=1.0, dt_max=10.0, hit_times=(31.0,))
+    plain = _steps(c, {}, 11)
+    print("steps", plain)
+    # the code before took 10, 10, 10, 1, 10, ... (a 1-s sliver), and the final time the same way
+    assert plain == pytest.approx([10, 10, 5.5, 5.5, 10, 10, 10, 10, 10, 9.5, 9.5])
+    cut = _steps(c, {4: 1}, 13)                          # the step landing on 31 cut by a rejected try
+    print("with a rejected landing step", cut)
+    assert 31.0 in np.round(np.cumsum(cut), 12)
+    # back on the schedule (the code before stayed at 1 s for the rest of the run)
+    assert cut[8:] == pytest.approx([10.0] * 5)
+
+
 @pytest.mark.parametrize("size,ranks", [(1e-6, 1), (1e-9, 1), (1e-6, 2)])
 def test_a_mesh_beyond_the_cell_limit_is_refused_before_meshing(tmp_path, size, ranks):
     """Issue 15: contact_patch -thm_mesh_size 1e-6 used to hang in gmsh and
