@@ -45,6 +45,18 @@ def p1_gradients(X: np.ndarray, cells: np.ndarray, values: np.ndarray):
     return grad, measure, P.mean(axis=1)
 
 
+def field_at(run: str, stem: str, step: int, name: str, vertices: int):
+    """(X, cells by their vertices, t, values) of field ``name`` at output ``step``: from
+    ``stem``.h5, or ``stem``_p1.h5 where a P2 run writes its P1 fields (pm, Tm, pf, Tf beside P2 u
+    and the aperture).  Both files list the same cells in the same order."""
+    for path in (os.path.join(run, f"{stem}.h5"), os.path.join(run, f"{stem}_p1.h5")):
+        if os.path.exists(path):
+            X, cells, t, F = read_output(path, step)
+            if name in F:
+                return X, cells[:, :vertices], t, F[name]
+    raise SystemExit(f"scene3_flow_split.py: no {stem}.h5 or {stem}_p1.h5 with {name} in {run}")
+
+
 def viscosity_of(text: str) -> Viscosity:
     """The run's viscosity from its provenance (the repr of ``Viscosity``)."""
     if "water=True" in text:
@@ -62,15 +74,18 @@ def flow_split(run: str, slab: float) -> list[dict]:
         ntimes = len(h5.attrs["times"])
     rows = []
     for step in range(ntimes):
-        X, cells, t, F = read_output(os.path.join(run, "fields.h5"), step)
-        Xf, tris, _, Ff = read_output(os.path.join(run, "fracture.h5"), step)
-        g, vol, c = p1_gradients(X, cells, F["pm"])
-        mu = visc.mu(F["Tm"][cells].mean(axis=1) + CELSIUS)
+        X, cells, t, pm = field_at(run, "fields", step, "pm", 4)
+        Tm = field_at(run, "fields", step, "Tm", 4)[3]
+        Xf, tris, _, pf = field_at(run, "fracture", step, "pf", 3)
+        Tf = field_at(run, "fracture", step, "Tf", 3)[3]
+        _, a_tris, _, aperture = field_at(run, "fracture", step, "aperture", 3)
+        g, vol, c = p1_gradients(X, cells, pm)
+        mu = visc.mu(Tm[cells].mean(axis=1) + CELSIUS)
         sel = np.abs(c[:, 1]) < 0.5 * slab
         q_rock = float(np.sum(-(k / mu[sel]) * g[sel, 1] * vol[sel]) / slab)
-        gf, area, cf = p1_gradients(Xf, tris, Ff["pf"])
-        a3 = (Ff["aperture"][tris] ** 3).mean(axis=1)
-        muf = visc.mu(Ff["Tf"][tris].mean(axis=1) + CELSIUS)
+        gf, area, cf = p1_gradients(Xf, tris, pf)
+        a3 = (aperture[a_tris] ** 3).mean(axis=1)
+        muf = visc.mu(Tf[tris].mean(axis=1) + CELSIUS)
         on = np.abs(cf[:, 1]) < 0.5 * slab
         q_frac = float(np.sum(-(a3[on] / (12.0 * muf[on])) * gf[on, 1] * area[on]) / slab)
         rows.append({"run": run, "years": t / YEAR, "rock": q_rock, "fracture": q_frac})
