@@ -69,13 +69,17 @@ def test_contact_schur_takes_the_face_loads_alone(tmp_path):
     completes as well.  The linear solves go to 1e-10, the recipe's
     tolerance when this was measured: at the recipe's 1e-6 (stop 33) the
     control rejects 1 step of 4 with PETSc 3.26 (2 682 Krylov against
-    1 071 for ``faces``) and 3 of 7 with 3.18."""
+    1 071 for ``faces``) and 3 of 7 with 3.18.  Since stop 34's step
+    control (a rejected step near a hit time grows back to the step before
+    it) the control's step collapses instead: 24 rejected, the run stops at
+    t = 0.9 s (measured with 3.18)."""
     common = ("-options_file", f"{ROOT}/options/scenes/coupled_mms.opts", "-thm_coupled_mms_state", "closed",
               *BLOCK, "-ksp_rtol", "1e-10")
     heat_first = ("-vi_groups", "Tf=Tf,Tm=Tm,mech=u+lam+tau,pm=pm,pf=pf", "-vi_contact_schur", "all")
     runs = {}
-    for mode in ("faces", "all"):
-        _, runs[mode] = run_petthm("coupled_mms", tmp_path / mode, *common, "-vi_contact_schur", mode)
+    for mode in ("faces", "all"):                    # the control may fail outright (check=False)
+        _, runs[mode] = run_petthm("coupled_mms", tmp_path / mode, *common, "-vi_contact_schur", mode,
+                                   check=(mode == "faces"))
     _, runs["heat_first"] = run_petthm("coupled_mms", tmp_path / "heat_first", *common, *heat_first)
     print({m: (s["steps"], s["rejected_steps"], s["ksp_iterations"]) for m, s in runs.items()})
     for ok in ("faces", "heat_first"):
