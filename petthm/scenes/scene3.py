@@ -207,7 +207,11 @@ class InclinedPenny(ClosedUnderStress, Scene):
         step, and one AMG cycle on it fails (the linear solve reached 500
         iterations at dt = 6e6 s); with ILU(0) it converges (381 Krylov
         iterations in 7 Newton).  Tf lives on the fracture surface only, so
-        its blocks stay small.
+        its blocks stay small.  Tm by ILU(0) as well: late in the run (case 2
+        at 30 years, one 3.4e6-s step) one AMG cycle on Tm is the weak block
+        (188 Krylov iterations; Tm by LU 118, by ILU(0) 126), and the first
+        12 steps take 896 against 1 029.  Block Jacobi weakens with the
+        number of ranks on this 3D field (docs/solvers.md).
 
         One Chebyshev step on the P2 level of the glued elasticity's
         p-multigrid (three elsewhere): that level's products are most of a
@@ -217,6 +221,8 @@ class InclinedPenny(ClosedUnderStress, Scene):
         return {"vi_groups": "Tf=Tf,Tm=Tm,mech=u+lam+tau,pm=pm,pf=pf",
                 "vi_fieldsplit_Tf_pc_type": "bjacobi",
                 "vi_fieldsplit_Tf_sub_pc_type": "ilu",
+                "vi_fieldsplit_Tm_pc_type": "bjacobi",
+                "vi_fieldsplit_Tm_sub_pc_type": "ilu",
                 "vi_fieldsplit_mech_contact_mg_levels_ksp_max_it": "1"}
 
     def hit_times(self):
