@@ -27,6 +27,7 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from petthm.fluid import Viscosity  # noqa: E402
 from petthm.output import read_output  # noqa: E402
+from study_tables import output_with  # noqa: E402
 
 YEAR = 365.25 * 86400.0
 CELSIUS = 273.15
@@ -46,15 +47,11 @@ def p1_gradients(X: np.ndarray, cells: np.ndarray, values: np.ndarray):
 
 
 def field_at(run: str, stem: str, step: int, name: str, vertices: int):
-    """(X, cells by their vertices, t, values) of field ``name`` at output ``step``: from
-    ``stem``.h5, or ``stem``_p1.h5 where a P2 run writes its P1 fields (pm, Tm, pf, Tf beside P2 u
-    and the aperture).  Both files list the same cells in the same order."""
-    for path in (os.path.join(run, f"{stem}.h5"), os.path.join(run, f"{stem}_p1.h5")):
-        if os.path.exists(path):
-            X, cells, t, F = read_output(path, step)
-            if name in F:
-                return X, cells[:, :vertices], t, F[name]
-    raise SystemExit(f"scene3_flow_split.py: no {stem}.h5 or {stem}_p1.h5 with {name} in {run}")
+    """(X, cells by their vertices, t, values) of field ``name`` at output ``step``
+    (``study_tables.output_with``: a P2 run writes its P1 fields to ``stem``_p1.h5; both files list
+    the same cells in the same order)."""
+    X, cells, t, F = read_output(output_with(run, stem, name), step)
+    return X, cells[:, :vertices], t, F[name]
 
 
 def viscosity_of(text: str) -> Viscosity:

@@ -23,7 +23,7 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from study_tables import ROOT, markdown, read_history, read_summary, run_petthm, write_csv
+from study_tables import ROOT, markdown, output_with, read_history, read_summary, run_petthm, write_csv
 
 YEAR = 365.25 * 86400.0
 _COARSE = os.path.join(ROOT, "options", "scenes", "inclined_penny_coarse.opts")
@@ -133,17 +133,6 @@ def _series(path):
         return h5["mesh/geometry"][()], h5["mesh/topology"][()], times, fields
 
 
-def _series_of(d, stem, name):
-    """``_series`` of the output file of run ``d`` that holds field ``name``: ``stem``.h5, or
-    ``stem``_p1.h5 where a P2 run writes its P1 fields (pf, Tf, pm, Tm beside P2 u)."""
-    for path in (os.path.join(d, f"{stem}.h5"), os.path.join(d, f"{stem}_p1.h5")):
-        if os.path.exists(path):
-            series = _series(path)
-            if name in series[3]:
-                return series
-    raise SystemExit(f"scene3_study.py: no {stem}.h5 or {stem}_p1.h5 with {name} in {d}")
-
-
 def _in_plane(X, dip_deg):
     """Coordinates in the fracture's plane: along the dip (e_x rotated by the dip about y) and along y."""
     d = math.radians(dip_deg)
@@ -162,7 +151,7 @@ def fig8_10(out, cases):
         fig, axs = plt.subplots(len(cases), 3, figsize=(13, 3.9 * len(cases)), squeeze=False)
         for i, c in enumerate(cases):
             d = run_dir(out, c)
-            X, topo, times, f = _series_of(d, "fracture", name)
+            X, topo, times, f = _series(output_with(d, "fracture", name))
             p = parameters(d)
             xi, eta = _in_plane(X, p["thm_scene3_dip"])
             tri = Triangulation(xi, eta, topo[:, :3])
@@ -197,7 +186,7 @@ def fig11(out, cases):
     for ax, c in zip(axs[0], cases):
         d = run_dir(out, c)
         p = parameters(d)
-        X, _, times, f = _series_of(d, "fields", "Tm")
+        X, _, times, f = _series(output_with(d, "fields", "Tm"))
         z0 = p["thm_scene3_well_standoff"] + p["thm_scene3_perforation"] / 2
         R = p["thm_scene3_radius"]
         slab = np.abs(X[:, 2] - z0) < max(2 * p["thm_scene3_fracture_size"], 30.0)

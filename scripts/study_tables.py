@@ -40,6 +40,18 @@ def read_history(out_dir: str) -> dict[str, np.ndarray]:
     return {k: np.array([float(r[k]) for r in rows[1:]]) for k in rows[0] if k}
 
 
+def output_with(run: str, stem: str, name: str) -> str:
+    """The output file of run folder ``run`` that holds field ``name``: ``stem``.h5, or
+    ``stem``_p1.h5 where a P2 run writes its P1 fields (pf, Tf, pm, Tm beside P2 u)."""
+    import h5py
+    for path in (os.path.join(run, f"{stem}.h5"), os.path.join(run, f"{stem}_p1.h5")):
+        if os.path.exists(path):
+            with h5py.File(path, "r") as h5:
+                if name in h5["fields"]:
+                    return path
+    raise SystemExit(f"no {stem}.h5 or {stem}_p1.h5 with the field {name} in {run}")
+
+
 def write_csv(path: str, rows: list[dict]) -> None:
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path, "w", newline="") as f:
