@@ -56,7 +56,7 @@ differences with a negative control).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import partial
+from functools import cached_property, partial
 from typing import Callable, Optional
 
 import numpy as np
@@ -177,8 +177,10 @@ class _HeatPoint:
         """R carries T div b from the flow's mass balance."""
         return self.mass is not None
 
+    @cached_property
     def dZ_db(self):
-        """dZ_a/db_c of Z = tau R b: (nc, nq, a, c)."""
+        """dZ_a/db_c of Z = tau R b: (nc, nq, a, c) (once per batch of cells:
+        the T-T and T-p blocks both take it)."""
         tau, R, b = self.tau, self.R, self.b
         eye = np.eye(self.d)[None, None]
         return (-(tau ** 3 * R)[..., None, None] * b[..., :, None] * self.D[..., None, :]
@@ -277,7 +279,7 @@ def heat_g2_TT(h: Heat, ctx):
     g = -b * (1.0 + hp.Tv[..., None] * m)                   # d(-b T)/dT
     if h.supg:
         g = g + (hp.tau * hp.C * ctx.shift)[..., None] * b
-        g = g + np.einsum("nqac,nqc->nqa", hp.dZ_db(), b * m)
+        g = g + (hp.dZ_db @ (b * m)[..., None])[..., 0]
         if hp.conservative:
             g = g + (hp.tau * _dE_dT(h, hp, ctx))[..., None] * b
     return g[:, :, None, :, None]
@@ -333,8 +335,8 @@ def heat_g3_Tp(h: Heat, ctx):
     dbdg = -h.fluid_rho_c * coef[..., None, None] * h.flow.permeability[None, None]
     D = -hp.Tv[..., None, None] * np.eye(hp.d)[None, None]
     if h.supg:
-        D = D + hp.dZ_db()
-    return np.einsum("nqac,nqce->nqae", D, dbdg)[:, :, None, :, None, :]
+        D = D + hp.dZ_db
+    return (D @ dbdg)[:, :, None, :, None, :]
 
 
 def heat_s0_aperture(h: Heat, ctx):
