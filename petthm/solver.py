@@ -280,18 +280,37 @@ class TimeStepper:
         around it (Scene 3 at 20 years: 6 500 s after 0.2-year steps) fails
         its linear solve with a preconditioner kept from the long steps, and
         its rejection used to restart the growth from the sliver."""
-        c = self.control
-        upcoming = [h - t for h in (*c.hit_times, c.final_time) if h - t > 1e-9 * max(abs(t), 1.0)]
-        gap = min(upcoming, default=math.inf)
-        if gap < dt * (1 + 1e-9):
-            self._last_dt_cut, dt = dt, gap
-        elif gap < 2.0 * dt:
-            self._last_dt_cut, dt = dt, 0.5 * gap
-        remaining = c.final_time - t
+        landed = self._landing(t, dt)
+        if landed != dt:
+            self._last_dt_cut, dt = dt, landed
+        remaining = self.control.final_time - t
         if remaining > 0:
             ts.setTimeStep(min(dt, remaining))
         self._proposed = dt
         self._monitor(ts, ts.getStepNumber(), t, ts.getSolution())
+
+    def _landing(self, t: float, dt: float) -> float:
+        """The step from t: dt, or cut to land on the next hit time or the
+        final time (in two equal steps when it is closer than two)."""
+        c = self.control
+        upcoming = [h - t for h in (*c.hit_times, c.final_time) if h - t > 1e-9 * max(abs(t), 1.0)]
+        gap = min(upcoming, default=math.inf)
+        if gap < dt * (1 + 1e-9):
+            return gap
+        return 0.5 * gap if gap < 2.0 * dt else dt
+
+    def _land_first_step(self) -> None:
+        """The landing rule for the first step of a run or of a restart (a
+        restart's step was proposed for the final time of the run it came
+        from: resumed 0.3 s short of a new final time it took a full step and
+        then a 0.3-s sliver); the step it cuts is kept for after the hit."""
+        t, dt = self.ts.getTime(), self.ts.getTimeStep()
+        landed = self._landing(t, dt)
+        if landed < dt * (1 - 1e-12):
+            if self._last_dt_cut is None:
+                self._last_dt_cut = dt
+            self.ts.setTimeStep(landed)
+            self._proposed = landed
 
     def _monitor(self, ts, step, t, X):
         """Call the user's monitor once per state: from the post-step of
@@ -355,6 +374,7 @@ class TimeStepper:
     def solve(self) -> int:
         """Run to the final time; returns TS converged reason (negative: failed)."""
         self.front_limit.start(self.problem.X)
+        self._land_first_step()
         self.ts.solve(self.problem.X)
         if self.error is not None:
             raise self.error

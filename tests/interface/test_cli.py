@@ -214,12 +214,16 @@ class _ScheduleTS:
         return None
 
 
-def _steps(control, cuts, n):
+def _steps(control, cuts, n, start=0.0, dt=None):
+    """The steps of ``n`` accepted steps from ``start`` (a restart's time and
+    step ``dt``; default: the run's start) under ``control``."""
     from petthm.solver import TimeStepper
     stepper = TimeStepper.__new__(TimeStepper)          # the schedule alone, without a problem
     stepper._start_schedule(control, control.dt_initial)
     stepper._user_monitor = None
-    ts = _ScheduleTS(control.dt_initial, cuts)
+    ts = stepper.ts = _ScheduleTS(dt or control.dt_initial, cuts)
+    ts.t = start
+    stepper._land_first_step()
     taken = []
     for _ in range(n):
         ts.advance()
@@ -263,6 +267,11 @@ def test_a_hit_time_is_reached_without_a_sliver_step():
     assert 31.0 in np.round(np.cumsum(cut), 12)
     # back on the schedule (the code before stayed at 1 s for the rest of the run)
     assert cut[8:] == pytest.approx([10.0] * 5)
+    # a restart 10.3 s before a new final time, its checkpoint's step 10 s: two equal steps (the code
+    # before took 10 s and a 0.3-s sliver; seen restarting Scene 3 mid-run), and before the next hit
+    # time from a restart the same
+    assert _steps(c, {}, 2, start=89.7, dt=10.0) == pytest.approx([5.15, 5.15])
+    assert _steps(c, {}, 4, start=15.0, dt=10.0) == pytest.approx([8.0, 8.0, 10.0, 10.0])
 
 
 @pytest.mark.parametrize("size,ranks", [(1e-6, 1), (1e-9, 1), (1e-6, 2)])

@@ -175,6 +175,10 @@ def test_a_scene_changes_the_block_recipe():
     plain = solver_defaults_by_size({"pc_type": "lu"}, True, 10**6, 50000)
     assert plain["vi_groups"] == BLOCK_RECIPE["vi_groups"]
     assert solver_defaults_by_size({"pc_type": "lu"}, True, 10, 50000, order) == {"pc_type": "lu"}
+    # Scene 3's Newton tolerance: 1e-9 on the block path, the contact default (1e-12) on the direct one
+    direct = {"pc_type": "lu", "snes_atol": "1e-12"}
+    assert solver_defaults_by_size(direct, True, 10**6, 50000, order)["snes_atol"] == "1e-9"
+    assert solver_defaults_by_size(direct, True, 10, 50000, order)["snes_atol"] == "1e-12"
 
 
 def test_scene3_fracture_heat_takes_ilu_at_long_steps(tmp_path):
