@@ -1,4 +1,3 @@
-import petthm  # noqa: F401  (first: one BLAS thread per rank, before numpy loads its BLAS)
 import json
 import os
 import subprocess
