@@ -66,7 +66,7 @@ def mobility(fl: Flow, ctx):
 
 
 def unit_darcy(fl: Flow, ctx):
-    return np.einsum("ab,cqb->cqa", fl.permeability, ctx.grad(fl.p)[:, :, 0, :])
+    return ctx.grad(fl.p)[:, :, 0, :] @ np.swapaxes(fl.permeability, -1, -2)
 
 
 def permeability_grad_p(fl: Flow, ctx):

@@ -209,9 +209,9 @@ def advective_tau_term(b, ctx, degree: int):
         A = 4.0 / (ctx.h / degree) ** 2
         return A * np.einsum("cqa,cqa->cq", b, b), A[..., None] * b
     grads = np.concatenate([-G.sum(axis=1, keepdims=True), G], axis=1)           # (nc, d+1, d)
-    proj = np.einsum("cqa,cka->cqk", b, grads)
+    proj = b @ np.swapaxes(grads, 1, 2)                                            # (nc, nq, d+1)
     S = np.abs(proj).sum(axis=2)
-    D = degree ** 2 * S[..., None] * np.einsum("cqk,cka->cqa", np.sign(proj), grads)
+    D = degree ** 2 * S[..., None] * (np.sign(proj) @ grads)
     return (degree * S) ** 2, D
 
 
