@@ -219,17 +219,21 @@ class Assembler:
     def _node_pairs(self, key) -> sparsity.NodePairs:
         """The block of a slab key; blocks over the same element node tables
         share their node-pair index (``_node_tables``)."""
+        simplex_dim = self.mesh.rdim        # own and trace tables: the region's simplices, one per row
         if len(key) == 2:
             test, trial = key
             rows, cols = self.dofs(test), self.dofs(trial)
             tables = (self._node_tables(test), self._node_tables(trial))
+            if isinstance(test, Adjacent) or isinstance(trial, Adjacent):
+                simplex_dim = None          # rock cells next to fracture faces: another element
         else:
             field, boundary, i = key
             test = trial = field
             rows = cols = self.dofs(field)[self._facets[boundary][i].cells]
             tables = (boundary, i, self.disc.field(field).degree)
         m, n = self.disc.field(test).ncomp, self.disc.field(trial).ncomp
-        block = sparsity.NodePairs(rows, cols, m, n, self.disc.nlocal, like=self._like.get(tables))
+        block = sparsity.NodePairs(rows, cols, m, n, self.disc.nlocal, like=self._like.get(tables),
+                                   simplex_dim=simplex_dim)
         self._like.setdefault(tables, block)
         return block
 

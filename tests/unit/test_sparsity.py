@@ -2,6 +2,8 @@
 plain sum of every element entry, and the Jacobian of a coupled scene
 assembled through it against the element entries handed to PETSc as they
 are."""
+import math
+
 import numpy as np
 import pytest
 
@@ -152,6 +154,10 @@ def test_the_summed_jacobian_equals_the_element_entries_summed_by_petsc(tmp_path
     p.ijacobian(None, 0.5, x, x, 3.0, J, J)           # the second keeps the constant blocks
     M = _element_level_matrix(p, values)
     blocks = sum(len(a.sums.blocks) for a in p.assemblers.values())
+    numbered = [b for a in p.assemblers.values() for b, _ in a.sums.blocks.values()]
+    assert any(b.by_topology for b in numbered)                  # the rock's blocks at least
+    for b in numbered:                                            # one entry per nonzero either way
+        assert b.npairs == np.unique(b.keys).size
     M.axpy(-1.0, J)
     print(scene, "blocks", blocks, "difference", M.norm(), "of", J.norm())
     assert M.norm() <= 1e-12 * J.norm()
@@ -179,3 +185,73 @@ def test_a_discarded_matrix_is_made_again_from_nothing(tmp_path):
     assert again.keys() == blocks.keys() and all(again[k] is not blocks[k] for k in blocks)
     J2.axpy(-1.0, J1)
     assert J2.norm() <= 1e-14 * J1.norm()
+
+
+def _simplex_tables(tmp_path, dim, rng, shuffle):
+    """Element node tables of a small DMPlex box (vertices, then edges in
+    ``fe.EDGES``' order), each cell's vertices in a random local order when
+    ``shuffle`` (its edge columns renumbered to match): every ordering class
+    of ``simplexpairs`` occurs, not only the ascending one of ``Mesh``."""
+    from petsc4py import PETSc
+
+    from petthm import fe, meshing
+    from petthm.mesh import Mesh, read_plex
+    path = meshing.box(str(tmp_path / "box.msh"), [1.0] * dim, 0.4)
+    mesh = Mesh(read_plex(path, PETSc.COMM_SELF))
+    verts, edges = mesh.cell_vertices.copy(), mesh.cell_edges.copy()
+    if shuffle:
+        E = [tuple(e) for e in fe.EDGES[dim]]
+        for c in range(len(verts)):
+            perm = rng.permutation(dim + 1)                 # new local vertex i = old vertex perm[i]
+            where = {frozenset(e): k for k, e in enumerate(E)}
+            edges[c] = [edges[c][where[frozenset((perm[a], perm[b]))]] for a, b in E]
+            verts[c] = verts[c][perm]
+    nverts = mesh.vertex_coords.shape[0]
+    return verts, edges - edges.min() + nverts, nverts + edges.max() - edges.min() + 1
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("degrees", [(1, 1), (2, 2), (2, 1), (1, 2)])
+@pytest.mark.parametrize("shuffle", [False, True])
+def test_pairs_numbered_by_topology_are_the_unique_pairs(tmp_path, dim, degrees, shuffle):
+    """``simplexpairs.pair_slots``: every element entry's slot holds one node
+    pair, every slot is used, and there are exactly as many slots as
+    distinct pairs (``np.unique``), for P1/P2 rows and columns, triangles
+    and tetrahedra, with the cells' vertices in every local order."""
+    from petthm.simplexpairs import pair_slots
+    rng = np.random.default_rng(5)
+    verts, edges, nnodes = _simplex_tables(tmp_path, dim, rng, shuffle)
+    table = {1: verts, 2: np.hstack([verts, edges])}
+    rows, cols = table[degrees[0]], table[degrees[1]]
+    slots, count = pair_slots(verts, dim, rows.shape[1], cols.shape[1])
+    keys = (rows.astype(np.int64)[:, :, None] * nnodes + cols[:, None, :])
+    unique = np.full(count, -1, np.int64)
+    unique[slots] = keys
+    assert np.array_equal(unique[slots], keys)                  # one pair per slot
+    assert (unique >= 0).all()                                  # every slot used
+    assert count == np.unique(keys).size                        # each pair in one slot
+    orders = {tuple(np.argsort(v)) for v in verts}
+    assert len(orders) == (math.factorial(dim + 1) if shuffle else 1)
+
+
+def test_tables_that_are_not_simplices_fall_back_to_sorting():
+    """Random node tables of six nodes per element are no P2 triangles: the
+    topology's numbering puts two pairs into one slot (shown: the negative
+    control of the check), so ``NodePairs`` checks it and sorts instead; its
+    sums are exact either way."""
+    from petthm.simplexpairs import pair_slots
+    rng = np.random.default_rng(6)
+    nodes, ne = 20, 40
+    rows = _tables(rng, ne, np.arange(nodes), 6, 1, np.arange(nodes))
+    slots, count = pair_slots(rows[:, :3], 2, 6, 6)
+    keys = rows.astype(np.int64)[:, :, None] * nodes + rows[:, None, :]
+    unique = np.full(count, -1, np.int64)
+    unique[slots] = keys
+    assert not np.array_equal(unique[slots], keys)
+    block = NodePairs(rows, rows, 1, 1, nodes, simplex_dim=2)
+    assert not block.by_topology and block.npairs == np.unique(keys).size
+    values = rng.standard_normal((ne, 6, 6))
+    ident = np.arange(nodes, dtype=compat.INT)
+    assert np.allclose(_summed(block, rows, rows, values, nodes, ident),
+                       _dense_sum(rows, rows, values, nodes), rtol=0, atol=1e-13)
+    assert pair_slots(rows[:, :3], 2, 5, 6) is None                         # not a P1/P2 node count
