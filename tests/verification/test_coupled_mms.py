@@ -1,6 +1,7 @@
 """The full coupled manufactured solution (coupled_mms, verification.md section 8):
-every field of Scene 3 at once.  The 2D cases run here; the 3D ones are in
-scripts/coupled_mms_study.py (benchmarks/results/coupled_mms*)."""
+every field of Scene 3 at once.  The 2D cases run here, and one 3D pair (the
+closed aperture's order); the 3D rates are in scripts/coupled_mms_study.py
+(benchmarks/results/coupled_mms*)."""
 import dataclasses
 
 import numpy as np
@@ -51,6 +52,25 @@ def test_coupled_mms_rates(tmp_path, degree, state, supg, sizes):
         sl = fitted_slope(hs, err["lam"]["l2"])
         print(f"coupled_mms 2D P{degree} closed lam: L2 slope {sl:.2f}")
         assert sl >= degree - 0.2 and all(np.diff(err["lam"]["l2"]) < 0)
+
+
+def test_the_closed_fractures_fields_converge_at_the_order_of_its_aperture(tmp_path):
+    """3D P2, fracture closed: a = a0 - lam/Kn carries the contact traction's
+    error (order h^2, a stress's) into the cubic law and the fracture's
+    capacity.  With the manufactured joint soft (Kn = 2: lam moves a by up to
+    half of a0) pf and Tf converge at lam's order; with it stiff (Kn = 200,
+    the same solution otherwise) at the optimal order 3.  Two meshes
+    (h 0.50 -> 0.25; docs/coupled_mms.md, "The closed fracture's aperture"
+    for three: pf 3.19, Tf 3.50 against 2.00, 1.83)."""
+    def slopes(kn):
+        hs, err = _rates(tmp_path / f"kn{kn}", (0.25, 0.125), "-thm_coupled_mms_dim", 3, "-thm_fe_degree", 2,
+                         "-thm_coupled_mms_state", "closed", "-thm_coupled_mms_supg", 0,
+                         "-thm_fracture_normal_stiffness", kn, "-thm_direct_max_unknowns", 1000000)
+        return {f: fitted_slope(hs, err[f]["l2"]) for f in ("pf", "Tf", "lam")}   # lam: printed only
+    stiff, soft = slopes(200), slopes(2)
+    print("coupled_mms 3D P2 closed, L2 slopes: Kn = 200", stiff, "Kn = 2", soft)
+    assert stiff["pf"] >= 2.8 and stiff["Tf"] >= 2.8
+    assert soft["pf"] < 2.2 and soft["Tf"] < 2.2              # the channel: lam's order, measured 1.86 / 1.48
 
 
 def _consistency(tmp_path, size, **opts):
