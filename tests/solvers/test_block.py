@@ -179,6 +179,10 @@ def test_a_scene_changes_the_block_recipe():
     direct = {"pc_type": "lu", "snes_atol": "1e-12"}
     assert solver_defaults_by_size(direct, True, 10**6, 50000, order)["snes_atol"] == "1e-9"
     assert solver_defaults_by_size(direct, True, 10, 50000, order)["snes_atol"] == "1e-12"
+    load("penny_impermeable")                            # Scene 2: the same tolerance on the block path
+    scene2 = REGISTRY["penny_impermeable"].block_recipe(None)
+    assert solver_defaults_by_size(direct, True, 10**6, 50000, scene2)["snes_atol"] == "1e-9"
+    assert solver_defaults_by_size(direct, True, 10, 50000, scene2)["snes_atol"] == "1e-12"
 
 
 def test_scene3_fracture_heat_takes_ilu_at_long_steps(tmp_path):
