@@ -39,18 +39,22 @@ def node_vertex_sets(dim: int, nnodes: int) -> list[tuple] | None:
     return [(i,) for i in range(nv)] + [tuple(e) for e in fe.EDGES[dim]][:nnodes - nv]
 
 
-def _roles(nv: int, sizes_rows: set, sizes_cols: set) -> dict:
-    """Per carrier size k: role number of each (row mask, column mask) over the
-    carrier's k vertices (bit j: the j-th vertex in global order) whose union
-    is the whole carrier."""
-    roles = {}
+def _roles(nv: int, sizes_rows: set, sizes_cols: set) -> tuple[dict, dict]:
+    """Per carrier size k: the role number of each (row mask, column mask)
+    over the carrier's k vertices (bit j: the j-th vertex in global order)
+    whose union is the whole carrier, as a lookup array (-1: no role), and
+    the number of roles."""
+    lookup, count = {}, {}
     for k in range(1, nv + 1):
         full = (1 << k) - 1
         rows = [a for a in range(1, full + 1) if bin(a).count("1") in sizes_rows]
         cols = [b for b in range(1, full + 1) if bin(b).count("1") in sizes_cols]
         pairs = [(a, b) for a in rows for b in cols if a | b == full]
-        roles[k] = {ab: i for i, ab in enumerate(pairs)}
-    return roles
+        lookup[k] = np.full((1 << k, 1 << k), -1, np.intp)
+        for i, (a, b) in enumerate(pairs):
+            lookup[k][a, b] = i
+        count[k] = len(pairs)
+    return lookup, count
 
 
 @lru_cache(maxsize=None)
@@ -62,11 +66,7 @@ def _tables(dim: int, nnr: int, nnc: int):
     vr, vc = node_vertex_sets(dim, nnr), node_vertex_sets(dim, nnc)
     subsets = [s for k in range(1, nv + 1) for s in itertools.combinations(range(nv), k)]
     index = {s: i for i, s in enumerate(subsets)}
-    roles = _roles(nv, {len(s) for s in vr}, {len(s) for s in vc})
-    lookup = {k: np.full((1 << k, 1 << k), -1, np.intp) for k in roles}
-    for k, r in roles.items():
-        for (a, b), i in r.items():
-            lookup[k][a, b] = i
+    lookup, nroles = _roles(nv, {len(s) for s in vr}, {len(s) for s in vc})
     rank = np.array([np.argsort(p) for p in itertools.permutations(range(nv))])   # (nperm, nv)
     codes = rank @ (nv ** np.arange(nv))
     carrier = np.full((nv ** nv, nnr, nnc), -1, np.intp)
@@ -80,7 +80,7 @@ def _tables(dim: int, nnr: int, nnc: int):
         mb = bit[:, [S.index(i) for i in sb]].sum(axis=1)
         carrier[codes, a, b] = index[S]
         role[codes, a, b] = lookup[len(S)][ma, mb]
-    return subsets, carrier, role, {k: len(r) for k, r in roles.items()}
+    return subsets, carrier, role, nroles
 
 
 def _tuple_ids(t: np.ndarray, nvals: int) -> tuple[np.ndarray, int]:

@@ -68,6 +68,16 @@ def contact_solver_defaults(comm) -> dict:
     return dict(direct_solver_defaults(comm), snes_type="vinewtonrsls", snes_atol="1e-12")
 
 
+def contact_block_recipe() -> dict:
+    """The contact scenes' change to the block path (``Scene.block_recipe``):
+    Newton to a scaled residual of 1e-9, not ``contact_solver_defaults``'
+    1e-12 (an iterative refinement of PETSc's own LU, which the block path,
+    solving each Newton step to ``-ksp_rtol 1e-6``, does not have).
+    Measured on Scenes 2 and 3 (docs/solvers.md): a third of the Newton
+    iterations go, the reported quantities move by <= 2e-9 of their values."""
+    return {"snes_atol": "1e-9"}
+
+
 def mechanics_model(p, mesh, degree, pressure, normal_stress: float, u_scale: float):
     """u (``degree``) and lam (on the fracture): elasticity, the face loads
     of a prescribed ``pressure(x, t)`` and lam, and the contact rows."""

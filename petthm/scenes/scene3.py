@@ -37,7 +37,7 @@ from ..mesh import Interior
 from ..monitors import Worst, contact_node_checks, contact_node_fields
 from ..params import param
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
-from .contact import OPEN_TRACTION, contact_solver_defaults
+from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
 from .fractured import ClosedUnderStress, FirstLayer, balances_of, first_layer, first_layer_param, tf_range
 from .friction import slip_columns
 
@@ -219,16 +219,15 @@ class InclinedPenny(ClosedUnderStress, Scene):
         iterations for ~25 % less time (case 2, side by side: the first 12
         steps 136 s against 175 s, four 0.2-year steps 155 s against 205 s).
 
-        Newton to a scaled residual of 1e-9, not the direct path's 1e-12
-        (``contact_solver_defaults``: an iterative refinement of PETSc's own
-        LU, which the block path does not have).  At 0.2-year steps the second
+        Newton to a scaled residual of 1e-9 (``contact_block_recipe``).  At
+        0.2-year steps the second
         Newton iteration reaches 4e-10, and a third one changed the reported
         quantities by at most 2e-9 of their values (case 2 at 7 years, four
         steps, side by side: injection pressure 1.4e-10, production
         temperature 6e-11, max aperture increase 2e-9; mass balance 3.0e-8
         either way, energy balance 5e-11 against 5e-14) for 28 % of the
         time (92.5 s against 127.8 s; 563 against 781 Krylov iterations)."""
-        return {"snes_atol": "1e-9",
+        return {**contact_block_recipe(),
                 "vi_groups": "Tf=Tf,Tm=Tm,mech=u+lam+tau,pm=pm,pf=pf",
                 "vi_fieldsplit_Tf_pc_type": "bjacobi",
                 "vi_fieldsplit_Tf_sub_pc_type": "ilu",

@@ -33,7 +33,7 @@ from ..monitors import FractureWells, contact_node_checks, fracture_vertices
 from ..params import CELSIUS, param
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
-from .contact import OPEN_TRACTION, contact_solver_defaults, fracture_normal
+from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal
 from .fractured import (ClosedUnderStress, FirstLayer, WellsMonitor, first_layer, first_layer_param,
                         heat_wells_monitor, transmissivity)
 from .friction import slip_columns
@@ -163,14 +163,12 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         return dict(contact_solver_defaults(comm), snes_lag_preconditioner="10")
 
     def block_recipe(self):
-        """Newton to a scaled residual of 1e-9 on the block path, as Scene 3
-        (the direct path keeps the contact scenes' 1e-12, an iterative
-        refinement of PETSc's own LU).  Level 1 to 1e9 s, side by side
+        """``contact_block_recipe``: level 1 to 1e9 s, side by side
         (docs/solvers.md, stop 36): 217 against 314 Newton iterations, 19 123
         against 25 628 Krylov, 147 against 193 s; injection pressure,
         production temperature, lam and aperture at the injector equal to
         2e-12 relative, mass balance 5.4e-7 either way."""
-        return {"snes_atol": "1e-9"}
+        return contact_block_recipe()
 
     # -- geometry -----------------------------------------------------------------------
     @property

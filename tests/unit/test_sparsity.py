@@ -201,9 +201,9 @@ def _simplex_tables(tmp_path, dim, rng, shuffle):
     verts, edges = mesh.cell_vertices.copy(), mesh.cell_edges.copy()
     if shuffle:
         E = [tuple(e) for e in fe.EDGES[dim]]
+        where = {frozenset(e): k for k, e in enumerate(E)}
         for c in range(len(verts)):
             perm = rng.permutation(dim + 1)                 # new local vertex i = old vertex perm[i]
-            where = {frozenset(e): k for k, e in enumerate(E)}
             edges[c] = [edges[c][where[frozenset((perm[a], perm[b]))]] for a, b in E]
             verts[c] = verts[c][perm]
     nverts = mesh.vertex_coords.shape[0]
