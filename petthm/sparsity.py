@@ -10,8 +10,10 @@ fields over one set of elements) is summed here first:
 
 * once, at set-up, the node pairs of its element matrices are numbered
   (pairs of nodes, not of dofs: for a 3-component block one ninth of the
-  element entries): from the simplices' topology (``simplexpairs``, checked
-  entry by entry), else by ``np.unique``; then in key order;
+  element entries): from the simplices' topology (``simplexpairs``; it
+  checks, node by node, that the nodes are one-to-one functions of the
+  vertices and edges), else by ``np.unique``; then in key order (a radix
+  sort, ``radix``);
 * at every assembly the element values are summed into one entry per
   nonzero with ``np.bincount`` over that node-pair index (one pass per
   component pair).
@@ -27,7 +29,10 @@ from typing import Callable
 
 import numpy as np
 
-from . import compat, simplexpairs
+from . import compat, radix, simplexpairs
+
+
+SLOT_BATCH = 4096         # cells whose slots are made at once (~3 MB for P2 tetrahedra)
 
 
 class NodePairs:
@@ -52,52 +57,86 @@ class NodePairs:
         self.m, self.n, self.nlocal = m, n, int(nlocal)
         self.ne = rows.shape[0]
         self.nnF, self.nnG = rows.shape[1] // m, cols.shape[1] // n
-        keys = (rows[:, ::m].astype(np.int64)[:, :, None] * self.nlocal + cols[:, None, ::n]).reshape(-1)
-        if like is not None and like.inv.size == keys.size:
-            self.inv, self._any, self.by_topology = like.inv, like._any, like.by_topology
-            self.keys = keys[self._any]
-            if not np.array_equal(self.keys[self.inv], keys):
+        row_nodes, col_nodes = rows[:, ::m], cols[:, ::n]
+        if like is not None and (like.ne, like.nnF, like.nnG) == (self.ne, self.nnF, self.nnG):
+            self.inv, self.by_topology = like.inv, like.by_topology
+            self._at = (like.pairs_at(), None)
+            self.row_node, self.col_node = self._nodes_at(row_nodes, col_nodes)
+            if not np.array_equal(self.keys[self.inv], self._element_keys(row_nodes, col_nodes)):
                 like = None
         if like is None:
-            found = self._numbered_by_topology(rows[:, ::m], keys, simplex_dim)
+            found = self._numbered_by_topology(row_nodes, col_nodes, simplex_dim)
             self.by_topology = found is not None                        # numbered by ``simplexpairs``
             if found is None:
-                found = np.unique(keys, return_inverse=True)
-            self.keys, inv = found
+                keys, inv = np.unique(self._element_keys(row_nodes, col_nodes), return_inverse=True)
+                self.row_node, self.col_node = np.divmod(keys, self.nlocal)
+                entry = np.empty(keys.size, np.intp)                       # an element entry of each pair
+                entry[inv] = np.arange(inv.size)
+                cell, a, b = np.unravel_index(entry, (self.ne, self.nnF, self.nnG))
+                self._at = ((cell * self.nnF + a, cell * self.nnG + b), None)
+            else:
+                self.row_node, self.col_node, inv, self._at = found
             self.inv = inv.reshape(-1).astype(np.intp, copy=False)       # one per node pair of an element
-            self._any = np.empty(self.keys.size, np.intp)                  # an element entry of each pair
-            self._any[self.inv] = np.arange(keys.size)
-        self.npairs = self.keys.size
+        self.npairs = self.row_node.size
         self.size = self.npairs * m * n
         self.values = self.ne * self.nnF * m * self.nnG * n           # element entries
 
-    def _numbered_by_topology(self, row_nodes: np.ndarray, keys: np.ndarray, dim: int | None):
-        """The unique node-pair keys in key order and each element pair's
-        index into them, as ``np.unique(keys, return_inverse=True)`` gives
-        them, from the simplices' topology; None where the tables are not
-        simplex tables or the numbering does not reproduce the pairs
-        (checked entry by entry: a slot holds one pair, every slot is used)."""
+    def pairs_at(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where one element entry of each node pair has its row node and its
+        column node (flat indices into the node tables), in key order; put in
+        that order when first asked for (when another block shares this
+        one's index)."""
+        at, order = self._at
+        if order is not None:
+            self._at = at, order = (at[0][order], at[1][order]), None
+        return at
+
+    def _nodes_at(self, row_nodes: np.ndarray, col_nodes: np.ndarray):
+        """The row and the column node of each node pair in these tables."""
+        row_at, col_at = self.pairs_at()
+        return (np.ascontiguousarray(row_nodes).reshape(-1)[row_at],
+                np.ascontiguousarray(col_nodes).reshape(-1)[col_at])
+
+    @property
+    def keys(self) -> np.ndarray:
+        """The node pairs' keys, row node x nlocal + column node, ascending."""
+        return self.row_node.astype(np.int64) * self.nlocal + self.col_node
+
+    def _element_keys(self, row_nodes: np.ndarray, col_nodes: np.ndarray) -> np.ndarray:
+        """The node-pair key (row node x nlocal + column node) of every element
+        entry, flat."""
+        return (row_nodes.astype(np.int64)[:, :, None] * self.nlocal + col_nodes[:, None, :]).reshape(-1)
+
+    def _numbered_by_topology(self, row_nodes: np.ndarray, col_nodes: np.ndarray, dim: int | None):
+        """The node pairs' row and column nodes in key order, each element
+        pair's index into them (as ``np.unique(keys, return_inverse=True)``
+        gives them) and where the tables hold each pair's nodes with the key
+        order (``pairs_at``), from the simplices' topology; None where the tables are not simplex
+        tables (``simplexpairs.numbered_slots``' check)."""
         if dim is None:
             return None
-        found = simplexpairs.pair_slots(row_nodes[:, :dim + 1], dim, self.nnF, self.nnG)
+        found = simplexpairs.numbered_slots(row_nodes, col_nodes, dim)
         if found is None:
             return None
-        slots, count = found
-        inv = slots.reshape(-1)
-        unique = np.full(count, -1, np.int64)
-        unique[inv] = keys
-        if not (np.array_equal(unique[inv], keys) and (unique >= 0).all()):
-            return None
-        order = np.argsort(unique, kind="stable")      # in key order: PETSc's COO sort and the sums'
-        rank = np.empty(count, np.intp)                 # writes run 3-4x and 10-15 % faster (measured)
-        rank[order] = np.arange(count)
-        return unique[order], rank[inv]
+        row = np.ascontiguousarray(row_nodes).reshape(-1)[found.row_at]
+        col = np.ascontiguousarray(col_nodes).reshape(-1)[found.col_at]
+        keys = row.astype(np.int64)
+        keys *= self.nlocal
+        keys += col
+        order = radix.key_order(keys)                   # in key order: PETSc's COO
+        rank = np.empty(found.count, np.intp)           # sort and the sums' writes run 3-4x and 10-15 %
+        rank[order] = np.arange(found.count)            # faster (measured)
+        inv = np.empty((self.ne, self.nnF * self.nnG), np.intp)
+        for s in range(0, self.ne, SLOT_BATCH):          # batches of cells: the slots stay in cache
+            cells = slice(s, min(s + SLOT_BATCH, self.ne))
+            np.take(rank, found.slots(cells).reshape(-1), out=inv[cells].reshape(-1), mode="clip")
+        return row[order], col[order], inv.reshape(-1), ((found.row_at, found.col_at), order)
 
     def pattern(self, global_index: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> None:
         """Global rows and columns of the nonzeros (-1: constrained) written
         into ``rows`` and ``cols`` (``size`` entries each)."""
-        r = global_index[(self.keys // self.nlocal)[None, None, :] + np.arange(self.m)[:, None, None]]
-        c = global_index[(self.keys % self.nlocal)[None, None, :] + np.arange(self.n)[None, :, None]]
+        r = global_index[self.row_node[None, None, :] + np.arange(self.m)[:, None, None]]
+        c = global_index[self.col_node[None, None, :] + np.arange(self.n)[None, :, None]]
         r, c = np.broadcast_arrays(r, c)
         rows[...], cols[...] = r.reshape(-1), c.reshape(-1)
 

@@ -23,7 +23,16 @@ sys.exit(0 if v >= (3, 18) else 1)
 PY
 }
 
-if [ -x "$VENV/bin/python" ] && has_petsc4py "$VENV/bin/python" \
+old_numpy() {  # $1: python executable; true for a numpy 1.x older than 1.25
+  "$1" - <<'PY' 2>/dev/null
+import sys
+import numpy
+v = tuple(int(x) for x in numpy.__version__.split(".")[:2])
+sys.exit(0 if v < (1, 25) else 1)
+PY
+}
+
+if [ -x "$VENV/bin/python" ] && has_petsc4py "$VENV/bin/python" && ! old_numpy "$VENV/bin/python" \
    && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, mpi4py, ruff" 2>/dev/null; then
   exit 0
 fi
@@ -51,5 +60,9 @@ for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pyte
   "$VENV/bin/python" -c "import ${mod%%:*}" 2>/dev/null || need="$need ${mod#*:}"
 done
 [ -z "$need" ] || $PIP install -q $need
+# numpy 1.25+ sorts int64 with SIMD (AVX-512), which the Jacobian's pattern uses
+# (petthm/radix.py, docs/performance.md); within 1.x, so that the system's
+# petsc4py, scipy and h5py (built against an older 1.x) keep working
+if old_numpy "$VENV/bin/python"; then $PIP install -q --no-warn-conflicts "numpy>=1.25,<2"; fi
 $PIP install -q --no-deps --no-build-isolation -e .
 echo "petthm setup: done in $(( $(date +%s) - start )) s ($("$VENV/bin/python" -c 'from petsc4py import PETSc; print("PETSc", ".".join(map(str, PETSc.Sys.getVersion())))'))"

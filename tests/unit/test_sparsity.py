@@ -214,44 +214,67 @@ def _simplex_tables(tmp_path, dim, rng, shuffle):
 @pytest.mark.parametrize("degrees", [(1, 1), (2, 2), (2, 1), (1, 2)])
 @pytest.mark.parametrize("shuffle", [False, True])
 def test_pairs_numbered_by_topology_are_the_unique_pairs(tmp_path, dim, degrees, shuffle):
-    """``simplexpairs.pair_slots``: every element entry's slot holds one node
-    pair, every slot is used, and there are exactly as many slots as
-    distinct pairs (``np.unique``), for P1/P2 rows and columns, triangles
-    and tetrahedra, with the cells' vertices in every local order."""
-    from petthm.simplexpairs import pair_slots
+    """``simplexpairs.numbered_slots``: every element entry's slot holds one
+    node pair, every slot is used, there are exactly as many slots as
+    distinct pairs (``np.unique``), and each slot's given entry is one of
+    its pairs, for P1/P2 rows and columns, triangles and tetrahedra, with
+    the cells' vertices in every local order."""
+    from petthm.simplexpairs import numbered_slots
     rng = np.random.default_rng(5)
     verts, edges, nnodes = _simplex_tables(tmp_path, dim, rng, shuffle)
     table = {1: verts, 2: np.hstack([verts, edges])}
     rows, cols = table[degrees[0]], table[degrees[1]]
-    slots, count = pair_slots(verts, dim, rows.shape[1], cols.shape[1])
+    found = numbered_slots(rows, cols, dim)
+    slots, count = found.slots(slice(None)), found.count
+    assert np.array_equal(np.concatenate([found.slots(slice(s, s + 7)) for s in range(0, len(rows), 7)]),
+                          slots)                                # in batches the same
+    row_at, col_at = found.row_at, found.col_at
     keys = (rows.astype(np.int64)[:, :, None] * nnodes + cols[:, None, :])
     unique = np.full(count, -1, np.int64)
     unique[slots] = keys
     assert np.array_equal(unique[slots], keys)                  # one pair per slot
     assert (unique >= 0).all()                                  # every slot used
     assert count == np.unique(keys).size                        # each pair in one slot
+    assert np.array_equal(rows.reshape(-1)[row_at] * nnodes + cols.reshape(-1)[col_at], unique)   # where
     orders = {tuple(np.argsort(v)) for v in verts}
     assert len(orders) == (math.factorial(dim + 1) if shuffle else 1)
 
 
 def test_tables_that_are_not_simplices_fall_back_to_sorting():
     """Random node tables of six nodes per element are no P2 triangles: the
-    topology's numbering puts two pairs into one slot (shown: the negative
-    control of the check), so ``NodePairs`` checks it and sorts instead; its
-    sums are exact either way."""
-    from petthm.simplexpairs import pair_slots
+    topology's numbering, unchecked, puts two pairs into one slot (shown:
+    the negative control of the check); checked, it declines (the nodes are
+    no function of the vertices and edges), and ``NodePairs`` sorts instead;
+    its sums are exact either way."""
+    from petthm.simplexpairs import numbered_slots
     rng = np.random.default_rng(6)
     nodes, ne = 20, 40
     rows = _tables(rng, ne, np.arange(nodes), 6, 1, np.arange(nodes))
-    slots, count = pair_slots(rows[:, :3], 2, 6, 6)
+    rows = rows[(np.diff(np.sort(rows[:, :3], axis=1), axis=1) > 0).all(axis=1)]   # 3 distinct vertices
+    found = numbered_slots(rows, rows, 2, checked=False)
+    slots, count = found.slots(slice(None)), found.count
     keys = rows.astype(np.int64)[:, :, None] * nodes + rows[:, None, :]
     unique = np.full(count, -1, np.int64)
     unique[slots] = keys
     assert not np.array_equal(unique[slots], keys)
+    assert numbered_slots(rows, rows, 2) is None
     block = NodePairs(rows, rows, 1, 1, nodes, simplex_dim=2)
     assert not block.by_topology and block.npairs == np.unique(keys).size
-    values = rng.standard_normal((ne, 6, 6))
+    values = rng.standard_normal((rows.shape[0], 6, 6))
     ident = np.arange(nodes, dtype=compat.INT)
     assert np.allclose(_summed(block, rows, rows, values, nodes, ident),
                        _dense_sum(rows, rows, values, nodes), rtol=0, atol=1e-13)
-    assert pair_slots(rows[:, :3], 2, 5, 6) is None                         # not a P1/P2 node count
+    assert numbered_slots(rows[:, :5], rows, 2) is None                     # not a P1/P2 node count
+    assert numbered_slots(np.array([[0, 0, 1]]), np.array([[0, 0, 1]]), 2) is None   # a repeated vertex
+
+
+def test_a_node_shared_by_two_edges_declines_the_topology():
+    """The check's other half: nodes that are a function of the vertices and
+    edges but not one-to-one (two edges' midpoints numbered as one node)
+    would put one pair into two slots; the numbering declines them."""
+    from petthm.simplexpairs import numbered_slots
+    rows = np.array([[0, 1, 2, 3, 4, 5], [1, 2, 6, 4, 7, 8]])      # two P2 triangles, edge (1, 2) shared
+    assert numbered_slots(rows, rows, 2) is not None
+    merged = rows.copy()
+    merged[1, 4] = 3                                   # the second triangle's edge (2, 6) is node 3 too
+    assert numbered_slots(merged, merged, 2) is None
