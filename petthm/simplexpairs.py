@@ -243,7 +243,7 @@ def numbered_slots(row_nodes: np.ndarray, col_nodes: np.ndarray, dim: int,
         span = slice(offset, offset + count[k] * nroles[k])
         for at, pairs, nn in ((row_at, pair_of[0], nnr), (col_at, pair_of[1], nnc)):
             out = at[span].reshape(count[k], nroles[k])           # written in place: no temporaries
-            np.take(np.ascontiguousarray(pairs[:, :nroles[k]]), where, axis=0, out=out)
+            np.take(np.ascontiguousarray(pairs[:, :nroles[k]]), where, axis=0, out=out, mode="clip")
             out += (cell * nn)[:, None]
         offset += count[k] * nroles[k]
     return SlotNumbering(base, code, carrier, role, int(offset), row_at, col_at)
