@@ -12,8 +12,9 @@ fields over one set of elements) is summed here first:
   (pairs of nodes, not of dofs: for a 3-component block one ninth of the
   element entries): from the simplices' topology (``simplexpairs``; it
   checks, node by node, that the nodes are one-to-one functions of the
-  vertices and edges), else by ``np.unique``; then in key order (a radix
-  sort, ``radix``);
+  vertices and edges), else by ``np.unique``; then in key order
+  (``radix.key_order``: numpy's SIMD sort where it has one, else a radix
+  sort), the slots made in batches of cells;
 * at every assembly the element values are summed into one entry per
   nonzero with ``np.bincount`` over that node-pair index (one pass per
   component pair).
