@@ -38,12 +38,16 @@ def _simd_sort() -> bool:
 SIMD_SORT = _simd_sort()
 
 
-def key_order(keys: np.ndarray, packed: bool | None = None) -> np.ndarray:
+def key_order(keys: np.ndarray, packed: bool | None = None, overwrite: bool = False,
+              counting: np.ndarray | None = None) -> np.ndarray:
     """The stable permutation that sorts the non-negative integer ``keys``
     (1-D): ``keys[key_order(keys)]`` is ascending, equal keys in their
     original order.  ``packed``: sort the keys with their positions packed
     into the low bits (where they fit in 63 bits) rather than by radix;
-    default: where numpy's sort is SIMD (``SIMD_SORT``)."""
+    default: where numpy's sort is SIMD (``SIMD_SORT``).  ``overwrite``:
+    int64 ``keys`` may be overwritten (the packed sort then needs no copy);
+    ``counting``: ``np.arange(keys.size)``, when the caller has it (large
+    sorts are bound by fresh memory)."""
     keys = np.asarray(keys)
     if keys.size < 2:
         return np.arange(keys.size)
@@ -51,8 +55,10 @@ def key_order(keys: np.ndarray, packed: bool | None = None) -> np.ndarray:
         raise ValueError("radix.key_order: negative key")
     bits = int(keys.size - 1).bit_length()
     if (SIMD_SORT if packed is None else packed) and int(keys.max()) < 1 << (63 - bits):
-        packed_keys = keys.astype(np.int64) << bits
-        packed_keys |= np.arange(keys.size)
+        own = overwrite and keys.dtype == np.int64 and keys.flags.writeable and keys.flags.c_contiguous
+        packed_keys = keys if own else keys.astype(np.int64)
+        packed_keys <<= bits
+        packed_keys |= np.arange(keys.size) if counting is None else counting
         packed_keys.sort()
         packed_keys &= (1 << bits) - 1
         return packed_keys

@@ -138,7 +138,7 @@ def _carrier_ids(ordered: np.ndarray, subsets: list) -> tuple[np.ndarray, dict]:
     ne, nv = ordered.shape
     nverts = int(ordered.max()) + 1
     index = {s: i for i, s in enumerate(subsets)}
-    ids = np.empty((ne, len(subsets)), np.intp)
+    ids = np.empty((ne, len(subsets)), np.int32 if ne * len(subsets) < 2**31 else np.int64)
     count = {1: nverts}
     for i, s in enumerate(subsets[:nv]):
         ids[:, i] = ordered[:, s[0]]
@@ -229,8 +229,9 @@ def numbered_slots(row_nodes: np.ndarray, col_nodes: np.ndarray, dim: int,
                                              int(first[-1])) for table, where in tables):
         return None
     total = sum(count[k] * nroles[k] for k in range(1, nv + 1))
-    row_at, col_at = np.empty(total, np.intp), np.empty(total, np.intp)
-    base = np.empty_like(ids)                                   # per carrier: its first slot
+    at_type = np.int32 if ne * max(nnr, nnc) < 2**31 else np.int64     # half the memory
+    row_at, col_at = np.empty(total, at_type), np.empty(total, at_type)
+    base = np.empty(ids.shape, np.int32 if total < 2**31 else np.int64)   # per carrier: its first slot
     offset = 0
     for k in range(1, nv + 1):
         which = [i for i, s in enumerate(subsets) if len(s) == k]
@@ -243,7 +244,8 @@ def numbered_slots(row_nodes: np.ndarray, col_nodes: np.ndarray, dim: int,
         span = slice(offset, offset + count[k] * nroles[k])
         for at, pairs, nn in ((row_at, pair_of[0], nnr), (col_at, pair_of[1], nnc)):
             out = at[span].reshape(count[k], nroles[k])           # written in place: no temporaries
-            np.take(np.ascontiguousarray(pairs[:, :nroles[k]]), where, axis=0, out=out, mode="clip")
-            out += (cell * nn)[:, None]
+            np.take(np.ascontiguousarray(pairs[:, :nroles[k]], dtype=at_type), where, axis=0, out=out,
+                    mode="clip")
+            out += (cell * nn).astype(at_type)[:, None]
         offset += count[k] * nroles[k]
     return SlotNumbering(base, code, carrier, role, int(offset), row_at, col_at)
