@@ -29,7 +29,7 @@ import signal
 import numpy as np
 
 from .errors import InputError
-from .output import in_turns
+from .output import history_number, in_turns
 
 FILE = "checkpoint.h5"
 SIGNALS = ("SIGTERM", "SIGINT", "SIGUSR1")
@@ -191,7 +191,11 @@ class StopRequest:
 
 def truncate_history(path: str, t: float) -> None:
     """Drop the rows of ``history.csv`` after time t (written after the
-    checkpoint a restart continues from)."""
+    checkpoint a restart continues from).  The rows' times are t as the
+    history writes it (12 significant digits, ``output.history_number``),
+    so t is compared in that form: rounded up, 1102.6564319570314 is
+    1102.65643196, 2.7e-12 above t, and the checkpoint's own row must stay
+    (the restart does not write it again)."""
     import csv
     if not os.path.isfile(path):
         return
@@ -200,7 +204,8 @@ def truncate_history(path: str, t: float) -> None:
     if not rows:
         return
     col = rows[0].index("time") if "time" in rows[0] else 1
-    keep = [rows[0]] + [r for r in rows[1:] if r and float(r[col]) <= t * (1 + 1e-12) + 1e-300]
+    last = float(history_number(float(t)))
+    keep = [rows[0]] + [r for r in rows[1:] if r and float(r[col]) <= last]
     with open(path + ".tmp", "w", newline="") as f:
         csv.writer(f).writerows(keep)
     os.replace(path + ".tmp", path)

@@ -48,8 +48,13 @@ class History:
             self._file = None
 
 
+def history_number(v: float) -> str:
+    """A float as history.csv writes it (12 significant digits)."""
+    return f"{v:.12g}"
+
+
 def _fmt(v):
-    return f"{v:.12g}" if isinstance(v, float) else v
+    return history_number(v) if isinstance(v, float) else v
 
 
 def write_summary(path: str, summary: dict, rank: int) -> None:
