@@ -8,7 +8,7 @@ from importlib import import_module
 
 #: scene name -> the module (in this package) that registers it
 MODULES = {
-    "contact_patch": "contact", "fracture_inflation": "contact", "partial_opening": "contact",
+    "contact_patch": "contact", "fracture_inflation": "crack", "partial_opening": "crack",
     "sneddon": "contact", "coupled_mms": "coupled_mms", "fracture_flow_patch": "flow",
     "leakoff_1d": "flow", "radial_flow": "flow", "friction_patch": "friction",
     "inclined_crack": "friction", "gravity_column": "mechanics", "thermal_stress": "mechanics",
