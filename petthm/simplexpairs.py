@@ -129,6 +129,11 @@ def _ordered_vertices(v: np.ndarray):
     return ordered, rank @ (nv ** np.arange(nv))
 
 
+def _of_size(subsets: list, k: int) -> list[int]:
+    """The indices of the k-subsets in ``subsets``."""
+    return [i for i, s in enumerate(subsets) if len(s) == k]
+
+
 def _carrier_ids(ordered: np.ndarray, subsets: list) -> tuple[np.ndarray, dict]:
     """Each cell's id of each sub-simplex (ne, len(subsets)), a position
     subset of its ascending vertices ``ordered``; ids count from 0 per size,
@@ -143,7 +148,7 @@ def _carrier_ids(ordered: np.ndarray, subsets: list) -> tuple[np.ndarray, dict]:
     for i, s in enumerate(subsets[:nv]):
         ids[:, i] = ordered[:, s[0]]
     for k in range(2, nv + 1):
-        which = [i for i, s in enumerate(subsets) if len(s) == k]
+        which = _of_size(subsets, k)
         prefix = [index[subsets[i][:-1]] for i in which]
         last = [subsets[i][-1] for i in which]
         key = ids[:, prefix].astype(np.int64) * nverts + ordered[:, last]
@@ -234,7 +239,7 @@ def numbered_slots(row_nodes: np.ndarray, col_nodes: np.ndarray, dim: int,
     base = np.empty(ids.shape, np.int32 if total < 2**31 else np.int64)   # per carrier: its first slot
     offset = 0
     for k in range(1, nv + 1):
-        which = [i for i, s in enumerate(subsets) if len(s) == k]
+        which = _of_size(subsets, k)
         base[:, which] = offset + ids[:, which] * nroles[k]
         cell = np.empty(count[k], np.intp)                       # a cell holding each carrier ...
         sub = np.empty(count[k], np.intp)
