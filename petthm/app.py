@@ -140,7 +140,6 @@ class Run:
         self.comm = PETSc.COMM_WORLD
         self.mpi = self.comm.tompi4py()
         run = scene.run
-        self.outdir = run.output_dir or os.path.join("output", scene.name)
         if run.restart:
             if run.output_dir and os.path.abspath(run.output_dir) != os.path.abspath(run.restart):
                 raise InputError(f"options -thm_restart = {run.restart} and -thm_output_dir = "
@@ -149,7 +148,7 @@ class Run:
             if not os.path.isdir(run.restart):
                 raise InputError(f"option -thm_restart = {run.restart}: no such folder")
             checkpoint.check(run.restart, scene.name)
-            self.outdir = run.restart
+        self.outdir = scene.output_dir
         self.stage_wall = {}
         self.t_start = time.perf_counter()
         self._last_checkpoint = self.t_start

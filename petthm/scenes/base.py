@@ -137,8 +137,11 @@ class Scene:
 
     @property
     def output_dir(self) -> str:
+        """The run's folder: the folder of the run a restart continues
+        (``-thm_restart``: a restart goes on there), else ``-thm_output_dir``,
+        else output/<scene>."""
         import os
-        return self.run.output_dir or os.path.join("output", self.name)
+        return self.run.restart or self.run.output_dir or os.path.join("output", self.name)
 
     def mesh_dimension(self) -> tuple[int | None, str]:
         """(the space dimension the scene needs, the option that sets it or

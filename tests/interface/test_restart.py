@@ -3,6 +3,7 @@ a signal continues with -thm_restart to the uninterrupted run's final
 state, on the same or another rank count (values are keyed by the serial
 mesh's points, not by the partition)."""
 import csv
+import json
 import os
 import signal
 import subprocess
@@ -190,3 +191,22 @@ def test_restart_errors_are_one_line(tmp_path):
     run_petthm("heat_erfc", tmp_path / "heat", "-thm_final_time", 1e3)
     proc, _ = run_petthm("lauwerier", tmp_path / "heat", "-thm_restart", tmp_path / "heat", check=False)
     assert proc.returncode == 2 and "scene heat_erfc" in proc.stderr
+
+
+def test_a_restart_alone_goes_on_in_its_folder(tmp_path):
+    """``-thm_restart DIR`` without ``-thm_output_dir`` (as the error for two
+    folders asks): the run ends in DIR with every file a scene writes at its
+    end there (Scene 2's fracture maps went to output/<scene> of the working
+    folder, and the run ended in a traceback where that folder was missing)."""
+    scene, options = SCENE2
+    first = (*options[:-1], 3e6)
+    out = tmp_path / "run"
+    run_petthm(scene, out, *first)
+    os.remove(out / "fracture_final.npz")
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_restart", str(out), "-thm_quiet", *map(str, options)]
+    proc = subprocess.run(cmd, cwd=tmp_path, env=dict(os.environ, **MPI_ENV), capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    summary = json.load(open(out / "summary.json"))
+    assert summary["status"] == "completed" and summary["final_time"] == float(options[-1])
+    assert (out / "fracture_final.npz").exists() and not (tmp_path / "output").exists()
