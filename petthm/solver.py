@@ -74,6 +74,7 @@ BLOCK_RECIPE = {
     "ksp_rtol": "1e-6",
     "ksp_max_it": "500",
     "ksp_gmres_restart": "100",
+    "ksp_gmres_cgs_refinement_type": "refine_ifneeded",   # the reported residual is the true one (stop 38)
     "pc_type": "python",
     "pc_python_type": "petthm.fieldsplit.VIFieldSplit",
     "vi_groups": "mech=u+lam+tau,pm=pm,pf=pf,Tf=Tf,Tm=Tm",
