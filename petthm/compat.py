@@ -81,6 +81,14 @@ def snes_lag_preconditioner(snes: PETSc.SNES, lag: int, persists: bool | None = 
         _check(fn(snes.handle, int(bool(persists))), "SNESSetLagPreconditionerPersists")
 
 
+def set_jacobian_domain_error(snes: PETSc.SNES) -> None:
+    """SNESSetJacobianDomainError (not in petsc4py 3.18): the Jacobian cannot
+    be evaluated at this state; Newton stops (DIVERGED_JACOBIAN_DOMAIN) and
+    the time step is tried again, smaller."""
+    fn = _cfunc("SNESSetJacobianDomainError", ctypes.c_void_p)
+    _check(fn(snes.handle), "SNESSetJacobianDomainError")
+
+
 def ptap(A: PETSc.Mat, P: PETSc.Mat) -> PETSc.Mat:
     """P^T A P (petsc4py 3.18: ``Mat.PtAP``; renamed ``Mat.ptap`` later)."""
     fn = getattr(A, "ptap", None) or getattr(A, "PtAP")

@@ -213,7 +213,14 @@ class Problem:
     def ijacobian(self, ts, t, X, Xdot, shift, J, P):
         self._ev_jac.begin()
         xl, xdl = self.local_arrays(X, t, Xdot)
-        compat.coo_set_values(P, self.jacobian_values(xl, xdl, t, shift))
+        values = self.jacobian_values(xl, xdl, t, shift)
+        if not np.isfinite(np.sum(values)):
+            # a state where a property is not defined (mu(T) overflowing far outside the
+            # fluid's range): Newton stops there and the step is cut, rather than a
+            # preconditioner built on NaN (docs/reliability.md)
+            compat.set_jacobian_domain_error(ts.getSNES())
+            values[~np.isfinite(values)] = 0.0
+        compat.coo_set_values(P, values)
         P.assemble()
         self._jacobian_point = (xl.copy(), xdl.copy(), t, shift)   # for the blocks of some terms, below
         if J != P:

@@ -33,7 +33,8 @@ from ..monitors import FractureWells, contact_node_checks, fracture_vertices
 from ..params import CELSIUS, param
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
-from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal
+from .contact import (OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal,
+                      layered_glued_elasticity)
 from .fractured import (ClosedUnderStress, FirstLayer, WellsMonitor, first_layer, first_layer_param,
                         heat_wells_monitor, transmissivity)
 from .friction import slip_columns
@@ -167,8 +168,10 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         (docs/solvers.md, stop 36): 217 against 314 Newton iterations, 19 123
         against 25 628 Krylov, 147 against 193 s; injection pressure,
         production temperature, lam and aperture at the injector equal to
-        2e-12 relative, mass balance 5.4e-7 either way."""
-        return contact_block_recipe()
+        2e-12 relative, mass balance 5.4e-7 either way.  The glued
+        elasticity of the layered mesh by BoomerAMG where PETSc has hypre
+        (``layered_glued_elasticity``, stop 38)."""
+        return {**contact_block_recipe(), **layered_glued_elasticity(self.run.fe_degree)}
 
     # -- geometry -----------------------------------------------------------------------
     @property
