@@ -22,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from petsc4py import PETSc
 
 from .. import materials as mt
 from .. import meshing, probes
@@ -76,27 +75,6 @@ def contact_block_recipe() -> dict:
     Measured on Scenes 2 and 3 (docs/solvers.md): a third of the Newton
     iterations go, the reported quantities move by <= 2e-9 of their values."""
     return {"snes_atol": "1e-9"}
-
-
-#: BoomerAMG's settings for the glued elasticity (docs/solvers.md, stop 38): a
-#: strength threshold of 0.5 (GAMG's aggregation does not follow the strong
-#: couplings across a layered mesh's thin cells), HMIS coarsening, extended+i
-#: interpolation with at most 4 entries per row (a sparse hierarchy)
-BOOMERAMG = {"pc_type": "hypre", "pc_hypre_type": "boomeramg", "pc_hypre_boomeramg_strong_threshold": "0.5",
-             "pc_hypre_boomeramg_coarsen_type": "HMIS", "pc_hypre_boomeramg_interp_type": "ext+i",
-             "pc_hypre_boomeramg_P_max": "4"}
-
-
-def layered_glued_elasticity(degree: int) -> dict:
-    """The block path's solve of the glued elasticity on a layered mesh with
-    P1 u: one BoomerAMG V-cycle where PETSc has hypre (PETSc from PyPI has
-    not: GAMG, the recipe's default, stays).  Scene 2 level 1 to 1e9 s
-    (docs/solvers.md, stop 38): 8 688 against 18 037 Krylov iterations,
-    KSPSolve 74 against 161 s, the same steps and results.  P2 u keeps its
-    p-multigrid (not measured with BoomerAMG)."""
-    if degree != 1 or not PETSc.Sys.hasExternalPackage("hypre"):
-        return {}
-    return {"vi_fieldsplit_mech_contact_" + k: v for k, v in BOOMERAMG.items()}
 
 
 def mechanics_model(p, mesh, degree, pressure, normal_stress: float, u_scale: float):

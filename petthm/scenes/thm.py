@@ -31,10 +31,10 @@ from ..errors import InputError
 from ..fields import Domain
 from ..monitors import FractureWells, contact_node_checks, fracture_vertices
 from ..params import CELSIUS, param
+from ..solver import layered_glued_elasticity
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
-from .contact import (OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal,
-                      layered_glued_elasticity)
+from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal
 from .fractured import (ClosedUnderStress, FirstLayer, WellsMonitor, first_layer, first_layer_param,
                         heat_wells_monitor, transmissivity)
 from .friction import slip_columns
@@ -170,7 +170,7 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         production temperature, lam and aperture at the injector equal to
         2e-12 relative, mass balance 5.4e-7 either way.  The glued
         elasticity of the layered mesh by BoomerAMG where PETSc has hypre
-        (``layered_glued_elasticity``, stop 38)."""
+        (``solver.layered_glued_elasticity``, stop 38)."""
         return {**contact_block_recipe(), **layered_glued_elasticity(self.run.fe_degree)}
 
     # -- geometry -----------------------------------------------------------------------
