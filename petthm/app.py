@@ -274,6 +274,7 @@ class Run:
                               dt_max=run.dt_max or td.dt_max,
                               hit_times=tuple(scene.hit_times()),
                               pc_reuse=run.pc_reuse, pc_reuse_max_krylov=run.pc_reuse_max_krylov,
+                              predictor=run.predictor,
                               courant=run.dt_courant)
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
         scene_defaults = dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm),

@@ -202,6 +202,9 @@ class RunParams:
                                    "passed since the last one (0: by steps only)", lo=0.0)
     restart: str = param("", "-", "continue the run whose output folder this is, from its "
                          "checkpoint.h5 (same options and rank count; output goes on in that folder)")
+    predictor: str = param("linear", "-", "Newton's first iterate of a time step: linear (on the line "
+                           "through the last two accepted states) or none (the last state)",
+                           choices=("linear", "none"))
     pc_reuse: str = param("auto", "-", "reuse the preconditioner across Newton iterations and time "
                           "steps, rebuilt when the extra Krylov iterations have cost a set-up or a step "
                           "fails: on, off, or auto (on for a direct solve without friction)",

@@ -38,6 +38,7 @@ class StepControl:
     pc_reuse: str = "off"        # on, off, auto: on for a direct solve (PreconditionerReuse)
     pc_reuse_max_krylov: int = 30
     courant: float = 0.0         # largest front Courant number per step (0: no limit)
+    predictor: str = "none"      # Newton's first iterate of a step: linear, none (predictor.py)
 
     def dt_floor(self) -> float:
         """The smallest step a run may take before its end: 1e-10 of the end

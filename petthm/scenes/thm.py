@@ -31,7 +31,7 @@ from ..errors import InputError
 from ..fields import Domain
 from ..monitors import FractureWells, contact_node_checks, fracture_vertices
 from ..params import CELSIUS, param
-from ..solver import layered_glued_elasticity
+from ..solver import closed_fracture_recipe
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal
@@ -168,10 +168,11 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         (docs/solvers.md, stop 36): 217 against 314 Newton iterations, 19 123
         against 25 628 Krylov, 147 against 193 s; injection pressure,
         production temperature, lam and aperture at the injector equal to
-        2e-12 relative, mass balance 5.4e-7 either way.  The glued
-        elasticity of the layered mesh by BoomerAMG where PETSc has hypre
-        (``solver.layered_glued_elasticity``, stop 38)."""
-        return {**contact_block_recipe(), **layered_glued_elasticity(self.run.fe_degree)}
+        2e-12 relative, mass balance 5.4e-7 either way.  With P1 u the
+        mechanics, then {pf, Tf, Tm} as one split, the glued elasticity by
+        four CG iterations on BoomerAMG where PETSc has hypre
+        (``solver.closed_fracture_recipe``, stops 38-39)."""
+        return {**contact_block_recipe(), **closed_fracture_recipe(self.run.fe_degree)}
 
     # -- geometry -----------------------------------------------------------------------
     @property

@@ -201,10 +201,13 @@ def test_a_scene_changes_the_block_recipe():
     scene2 = scene2_recipe(1)
     assert solver_defaults_by_size(direct, True, 10**6, 50000, scene2)["snes_atol"] == "1e-9"
     assert solver_defaults_by_size(direct, True, 10, 50000, scene2)["snes_atol"] == "1e-12"
-    # its glued elasticity by BoomerAMG with P1 u where PETSc has hypre; P2 keeps its p-multigrid
-    amg = "vi_fieldsplit_mech_contact_pc_type"
+    # with P1 u: {pf, Tf, Tm} one split after the mechanics, the glued elasticity by CG on
+    # BoomerAMG where PETSc has hypre (else on GAMG); P2 keeps the recipe and its p-multigrid
+    amg, cg = "vi_fieldsplit_mech_contact_pc_type", "vi_fieldsplit_mech_contact_ksp_type"
     assert scene2.get(amg) == ("hypre" if PETSc.Sys.hasExternalPackage("hypre") else None)
-    assert amg not in scene2_recipe(2)
+    assert scene2[cg] == "cg" and scene2["vi_groups"].endswith("flow_heat=pf+Tf+Tm")
+    assert scene2["vi_fieldsplit_flow_heat_ksp_type"] == "gmres"
+    assert {amg, cg, "vi_groups"}.isdisjoint(scene2_recipe(2))
     assert amg not in solver_defaults_by_size(direct, True, 10, 50000, scene2)
 
 
