@@ -12,9 +12,12 @@ reduced the residual 4x and the second converged; from the line it reduces
 it ~1500x (docs/solvers.md, stop 39).  The VI Newton methods project the
 start onto the bounds.
 
-A step tried again after a failed solve, the first step of a run and of a
-restart, and a step after an unaccepted state start from X_n, as before:
-the line through a failed attempt is no evidence.  PETSc's own
+A step tried again after a failed solve, and the first two steps of a run
+and of a restart, start from X_n, as before: the line through a failed
+attempt is no evidence, and the line through the initial state would repeat
+the jump a run starts with (wells switched on at t = 0), which the first
+step absorbs (Scene 3 in 0.2-year steps: step 2 took 5 Newton iterations on
+that line against 4 from X_1).  PETSc's own
 ``-ts_theta_initial_guess_extrapolate`` extrapolates a retry from the failed
 attempt's last iterate, hence this class.
 """
@@ -37,8 +40,7 @@ class LinearPredictor:
         self.used = 0            # steps started from the line
 
     def accepted(self, t: float, X: PETSc.Vec) -> None:
-        """Record the state X at time t that the TS has accepted (from its
-        post-step; the initial state before the first step)."""
+        """Record the state X at time t that the TS has accepted (from its post-step)."""
         if self._last is not None and t > self._last[0]:
             t0, X0 = self._last
             change = self._change[1] if self._change is not None else X.duplicate()

@@ -201,6 +201,8 @@ DIRECT_PCS = ("lu", "cholesky", "redundant")
 class TimeStepper:
     """Backward-Euler TS on a ``Problem`` with growth-limited steps and monitors."""
 
+    predictor: LinearPredictor | None = None     # Newton's start of a step (-thm_predictor)
+
     def __init__(self, problem: Problem, control: StepControl,
                  monitor: Callable[[int, float, float], None] | None = None):
         self.problem, self.control = problem, control
@@ -427,8 +429,6 @@ class TimeStepper:
     def solve(self) -> int:
         """Run to the final time; returns TS converged reason (negative: failed)."""
         self.front_limit.start(self.problem.X)
-        if self.predictor is not None:
-            self.predictor.accepted(self.ts.getTime(), self.problem.X)   # the state the run starts from
         self._land_first_step()
         self.ts.solve(self.problem.X)
         if self.error is not None:
