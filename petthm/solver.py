@@ -112,24 +112,23 @@ FLOW_HEAT_SPLIT = {"ksp_type": "gmres", "ksp_rtol": "1e-3", "ksp_max_it": "200",
 
 def closed_fracture_recipe(degree: int) -> dict:
     """The block path of a scene whose mechanics is loaded by a closed
-    fracture's flow and by the rock's heat on a layered mesh (Scene 2), P1 u:
-    the mechanics split, then {pf, Tf, Tm} as one split (``FLOW_HEAT_SPLIT``);
-    the glued elasticity by four CG iterations (``GLUED_CG``) on a BoomerAMG
-    cycle where PETSc has hypre (``BOOMERAMG``), else on the recipe's GAMG
-    cycle.  At the long steps block Gauss-Seidel over pf, Tf and Tm dropped
-    the coupling that made the count, and one cycle's error in the
-    elasticity multiplied it; each fix alone does little (docs/solvers.md,
-    stop 39).  Scene 2 default, five 1.3-1.8e7-s steps: 13.8 against 85.0
-    Krylov iterations per Newton iteration, KSPSolve 6.8 against 26.7 s
-    (GAMG, no hypre: 20.7 against 176.6, 25.1 against 49.1 s).  P2 u keeps
-    the recipe with its p-multigrid (not measured with these)."""
-    if degree != 1:
-        return {}
+    fracture's flow and by the rock's heat on a layered mesh (Scene 2): the
+    mechanics split, then {pf, Tf, Tm} as one split (``FLOW_HEAT_SPLIT``);
+    the glued elasticity by four CG iterations (``GLUED_CG``) on its
+    multigrid cycle: with P1 u BoomerAMG where PETSc has hypre
+    (``BOOMERAMG``), else the recipe's GAMG; with P2 u its p-multigrid.  At
+    the long steps block Gauss-Seidel over pf, Tf and Tm dropped the
+    coupling that made the count, and one cycle's error in the elasticity
+    multiplied it; each fix alone does little (docs/solvers.md, stop 39).
+    Scene 2 default, five 1.3-1.8e7-s steps: 13.8 against 85.0 Krylov
+    iterations per Newton iteration, KSPSolve 6.8 against 26.7 s (GAMG, no
+    hypre: 20.7 against 176.6, 25.1 against 49.1 s).  P2 u, level 1 to
+    1.7e7 s: 6.7 against 37.5 per Newton iteration."""
     mech = "vi_fieldsplit_mech_contact_"
     out = {"vi_groups": "mech=u+lam+tau,pm=pm,flow_heat=pf+Tf+Tm",
            **{mech + k: v for k, v in GLUED_CG.items()},
            **{"vi_fieldsplit_flow_heat_" + k: v for k, v in FLOW_HEAT_SPLIT.items()}}
-    if PETSc.Sys.hasExternalPackage("hypre"):
+    if degree == 1 and PETSc.Sys.hasExternalPackage("hypre"):
         out.update({mech + k: v for k, v in BOOMERAMG.items()})
     return out
 

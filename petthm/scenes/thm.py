@@ -168,9 +168,9 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         (docs/solvers.md, stop 36): 217 against 314 Newton iterations, 19 123
         against 25 628 Krylov, 147 against 193 s; injection pressure,
         production temperature, lam and aperture at the injector equal to
-        2e-12 relative, mass balance 5.4e-7 either way.  With P1 u the
-        mechanics, then {pf, Tf, Tm} as one split, the glued elasticity by
-        four CG iterations on BoomerAMG where PETSc has hypre
+        2e-12 relative, mass balance 5.4e-7 either way.  The mechanics,
+        then {pf, Tf, Tm} as one split, the glued elasticity by four CG
+        iterations on its cycle (BoomerAMG with P1 u where PETSc has hypre)
         (``solver.closed_fracture_recipe``, stops 38-39)."""
         return {**contact_block_recipe(), **closed_fracture_recipe(self.run.fe_degree)}
 

@@ -125,8 +125,16 @@ def test_p_multigrid_for_p2_displacement(tmp_path):
 def test_partial_opening_serial_and_parallel(tmp_path, method):
     """partial_opening (P1 u, the open zone moving along the crack) with the
     block preconditioner on 1 and 2 ranks: the direct solve's open zone and
-    centre opening, the same Newton counts, <= 60 Krylov per Newton."""
-    common = ("-thm_partial_crack_size", 0.05, "-thm_fe_degree", 1, "-snes_type", method)
+    centre opening, the same Newton counts, <= 60 Krylov per Newton.  Newton
+    starts each step from the last state (``-thm_predictor none``): on the
+    line through the last two states, steps 3-7 need no Newton iteration at
+    all, and at step 9, where the open zone moves, a round-off difference in
+    the start decided whether the first iteration found the new active set
+    (2 ranks: 9 or 10 Newton iterations from run to run, serial 9; the same
+    open zone and opening), so the counts would compare the start, not the
+    preconditioner."""
+    common = ("-thm_partial_crack_size", 0.05, "-thm_fe_degree", 1, "-snes_type", method,
+              "-thm_predictor", "none")
     _, ref = run_petthm("partial_opening", tmp_path / "direct", *common)
     newton = {}
     for n in (1, 2):
@@ -201,13 +209,14 @@ def test_a_scene_changes_the_block_recipe():
     scene2 = scene2_recipe(1)
     assert solver_defaults_by_size(direct, True, 10**6, 50000, scene2)["snes_atol"] == "1e-9"
     assert solver_defaults_by_size(direct, True, 10, 50000, scene2)["snes_atol"] == "1e-12"
-    # with P1 u: {pf, Tf, Tm} one split after the mechanics, the glued elasticity by CG on
-    # BoomerAMG where PETSc has hypre (else on GAMG); P2 keeps the recipe and its p-multigrid
+    # {pf, Tf, Tm} one split after the mechanics, the glued elasticity by CG on its cycle:
+    # BoomerAMG with P1 u where PETSc has hypre (else GAMG); P2 u its p-multigrid
     amg, cg = "vi_fieldsplit_mech_contact_pc_type", "vi_fieldsplit_mech_contact_ksp_type"
     assert scene2.get(amg) == ("hypre" if PETSc.Sys.hasExternalPackage("hypre") else None)
-    assert scene2[cg] == "cg" and scene2["vi_groups"].endswith("flow_heat=pf+Tf+Tm")
-    assert scene2["vi_fieldsplit_flow_heat_ksp_type"] == "gmres"
-    assert {amg, cg, "vi_groups"}.isdisjoint(scene2_recipe(2))
+    for recipe in (scene2, scene2_recipe(2)):
+        assert recipe[cg] == "cg" and recipe["vi_groups"].endswith("flow_heat=pf+Tf+Tm")
+        assert recipe["vi_fieldsplit_flow_heat_ksp_type"] == "gmres"
+    assert amg not in scene2_recipe(2)
     assert amg not in solver_defaults_by_size(direct, True, 10, 50000, scene2)
 
 
