@@ -25,8 +25,6 @@ from __future__ import annotations
 
 from petsc4py import PETSc
 
-PREDICTORS = ("linear", "none")
-
 
 class LinearPredictor:
     """SNES's initial-guess hook (``SNESSetComputeInitialGuess``) and the
@@ -56,7 +54,7 @@ class LinearPredictor:
         """Move ``x`` (the TS's start, X_n) along the line, on a step's first try only."""
         step = self.ts.getStepNumber()
         first_try, self._tried = self._tried != step, step
-        if not first_try or self._change is None or self._last is None:
+        if not first_try or self._change is None:          # _change implies _last
             return
         if abs(self.ts.getTime() - self._last[0]) > 1e-12 * max(abs(self._last[0]), 1.0):
             return                                   # x is not the state recorded last

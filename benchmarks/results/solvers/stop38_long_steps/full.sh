@@ -1,9 +1,10 @@
 #!/bin/bash
 # usage: full.sh NAME [extra...]: Scene 2 level 1 to 1e9 s, the size rule's block path
 name=$1; shift
-out=/tmp/ls/f-$name; rm -rf $out; mkdir -p $out
+out=${ROOT:-/tmp/ls}/f-$name; rm -rf $out; mkdir -p $out
 cd ${SRC:-/work/main}
-OPENBLAS_NUM_THREADS=1 /usr/bin/time -f '%e %M %U' -o $out/time.txt .venv/bin/python -m petthm penny_impermeable -options_file options/scenes/penny_impermeable.opts -thm_mesh_size 150 -thm_scene2_fracture_size 20 -thm_scene2_well_size 10 -thm_direct_max_unknowns 0 -thm_output_dir $out -log_view :$out/log.txt "$@" > $out/out.txt 2>&1
+# ROOT: checkpoint folder root (stop 39: /tmp/s9); MESH: mesh options (stop 39: MESH= for the default mesh)
+OPENBLAS_NUM_THREADS=1 /usr/bin/time -f '%e %M %U' -o $out/time.txt .venv/bin/python -m petthm penny_impermeable -options_file options/scenes/penny_impermeable.opts ${MESH--thm_mesh_size 150 -thm_scene2_fracture_size 20 -thm_scene2_well_size 10} -thm_direct_max_unknowns 0 -thm_output_dir $out -log_view :$out/log.txt "$@" > $out/out.txt 2>&1
 python3 - $out $name <<'PY'
 import json,sys,re
 d=json.load(open(sys.argv[1]+'/summary.json'))

@@ -1,9 +1,10 @@
 #!/bin/bash
 # usage: win.sh NAME [extra...]: 4 long steps from the t=4e8 checkpoint of level 1
 name=$1; shift
-out=/tmp/ls/w-$name; rm -rf $out; cp -r /tmp/ls/base $out
+out=${ROOT:-/tmp/ls}/w-$name; rm -rf $out; cp -r ${ROOT:-/tmp/ls}/base $out
 cd ${SRC:-/work/main}
-OPENBLAS_NUM_THREADS=1 /usr/bin/time -f '%e %M %U' -o $out/time.txt .venv/bin/python -m petthm penny_impermeable -options_file options/scenes/penny_impermeable.opts -thm_mesh_size 150 -thm_scene2_fracture_size 20 -thm_scene2_well_size 10 -thm_direct_max_unknowns 0 -thm_restart $out ${TF:--thm_final_time 4.8e8} -thm_pc_reuse off -log_view :$out/log.txt "$@" > $out/out.txt 2>&1
+# ROOT: checkpoint folder root (stop 39: /tmp/s9); MESH: mesh options (stop 39: MESH= for the default mesh)
+OPENBLAS_NUM_THREADS=1 /usr/bin/time -f '%e %M %U' -o $out/time.txt .venv/bin/python -m petthm penny_impermeable -options_file options/scenes/penny_impermeable.opts ${MESH--thm_mesh_size 150 -thm_scene2_fracture_size 20 -thm_scene2_well_size 10} -thm_direct_max_unknowns 0 -thm_restart $out ${TF:--thm_final_time 4.8e8} -thm_pc_reuse off -log_view :$out/log.txt "$@" > $out/out.txt 2>&1
 python3 - $out $name <<'PY'
 import json,sys,re
 d=json.load(open(sys.argv[1]+'/summary.json'))

@@ -1,5 +1,5 @@
 #!/bin/bash
-# usage: lev.sh L1|L2|L3 [extra]: Scene 2 P1 layered (stop 29's levels) to 1e9 s, the scene's block recipe
+# usage: [DEG=2] lev.sh L1|L2|L3 [extra]: Scene 2 layered (stop 29's levels; P1 u unless DEG=2) to 1e9 s, the scene's block recipe
 lev=$1; shift
 case $lev in
  L1) sz="-thm_scene2_fracture_size 20 -thm_scene2_well_size 10 -thm_mesh_size 150";;
@@ -8,7 +8,7 @@ case $lev in
 esac
 out=/tmp/s9/lev-$lev${TAG:-}; rm -rf $out; mkdir -p $out
 cd ${SRC:-/work/main}
-OPENBLAS_NUM_THREADS=1 /usr/bin/time -f '%e %M' -o $out/time.txt .venv/bin/python -m petthm penny_impermeable -options_file options/scenes/penny_impermeable.opts -thm_fe_degree 1 -thm_scene2_layer 2 -thm_scene2_layer_growth 2.5 -thm_direct_max_unknowns 0 $sz -thm_output_dir $out -log_view :$out/log.txt "$@" > $out/out.txt 2>&1
+OPENBLAS_NUM_THREADS=1 /usr/bin/time -f '%e %M' -o $out/time.txt .venv/bin/python -m petthm penny_impermeable -options_file options/scenes/penny_impermeable.opts -thm_fe_degree ${DEG:-1} -thm_scene2_layer 2 -thm_scene2_layer_growth 2.5 -thm_direct_max_unknowns 0 $sz -thm_output_dir $out -log_view :$out/log.txt "$@" > $out/out.txt 2>&1
 python3 - $out <<'PY'
 import json,sys,re
 d=json.load(open(sys.argv[1]+'/summary.json'))
