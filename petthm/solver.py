@@ -110,26 +110,45 @@ FLOW_HEAT_SPLIT = {"ksp_type": "gmres", "ksp_rtol": "1e-3", "ksp_max_it": "200",
                    "sub_pc_type": "ilu"}
 
 
-def closed_fracture_recipe(degree: int) -> dict:
-    """The block path of a scene whose mechanics is loaded by a closed
-    fracture's flow and by the rock's heat on a layered mesh (Scene 2): the
-    mechanics split, then {pf, Tf, Tm} as one split (``FLOW_HEAT_SPLIT``);
-    the glued elasticity by four CG iterations (``GLUED_CG``) on its
-    multigrid cycle: with P1 u BoomerAMG where PETSc has hypre
-    (``BOOMERAMG``), else the recipe's GAMG; with P2 u its p-multigrid.  At
-    the long steps block Gauss-Seidel over pf, Tf and Tm dropped the
-    coupling that made the count, and one cycle's error in the elasticity
-    multiplied it; each fix alone does little (docs/solvers.md, stop 39).
-    Scene 2 default, five 1.3-1.8e7-s steps: 13.8 against 85.0 Krylov
-    iterations per Newton iteration, KSPSolve 6.8 against 26.7 s (GAMG, no
-    hypre: 20.7 against 176.6, 25.1 against 49.1 s).  P2 u, level 1 to
-    1.7e7 s: 6.7 against 37.5 per Newton iteration."""
+def flow_heat_recipe(groups: str, degree: int) -> dict:
+    """The block path's changes for the splits ``groups`` (``-vi_groups``),
+    of which ``flow_heat`` holds the flow and heat fields and ``mech`` the
+    contact mechanics: ``flow_heat`` by GMRES to 1e-3 on ILU(0)
+    (``FLOW_HEAT_SPLIT``), the glued elasticity by four CG iterations
+    (``GLUED_CG``) on its multigrid cycle: with P1 u BoomerAMG where PETSc has
+    hypre (``BOOMERAMG``), else the recipe's GAMG; with P2 u its p-multigrid.
+    Block Gauss-Seidel between the flow and heat fields dropped the coupling
+    that made the Krylov count, and one cycle's error in the elasticity
+    multiplied it; each fix alone does little (docs/solvers.md, stops 39-40)."""
     mech = "vi_fieldsplit_mech_contact_"
-    out = {"vi_groups": "mech=u+lam+tau,pm=pm,flow_heat=pf+Tf+Tm",
+    out = {"vi_groups": groups,
            **{mech + k: v for k, v in GLUED_CG.items()},
            **{"vi_fieldsplit_flow_heat_" + k: v for k, v in FLOW_HEAT_SPLIT.items()}}
     if degree == 1 and PETSc.Sys.hasExternalPackage("hypre"):
         out.update({mech + k: v for k, v in BOOMERAMG.items()})
+    return out
+
+
+def closed_fracture_recipe(degree: int) -> dict:
+    """The block path of a scene whose mechanics is loaded by a closed
+    fracture's flow and by the rock's heat on a layered mesh (Scene 2): the
+    mechanics, then {pf, Tf, Tm} as one split (``flow_heat_recipe``).
+    Scene 2 default, five 1.3-1.8e7-s steps: 13.8 against 85.0 Krylov
+    iterations per Newton iteration, KSPSolve 6.8 against 26.7 s (GAMG, no
+    hypre: 20.7 against 176.6, 25.1 against 49.1 s).  P2 u, level 1 to
+    1.7e7 s: 6.7 against 37.5 per Newton iteration (stop 39).
+
+    With P2 u and hypre, BoomerAMG's cycle on the P2 glued elasticity
+    itself, in place of the p-multigrid: the layered mesh's thin cells
+    defeat the P2 level's Chebyshev/Jacobi smoothing, as they defeat GAMG's
+    aggregation with P1 u.  Scene 2 default with P2 u (241 080 unknowns),
+    two 9.4e6-s steps, side by side: 24.8 against 32.2 Krylov iterations
+    per Newton iteration, KSPSolve 110-112 against 182 s (docs/solvers.md,
+    stop 40)."""
+    out = flow_heat_recipe("mech=u+lam+tau,pm=pm,flow_heat=pf+Tf+Tm", degree)
+    if degree == 2 and PETSc.Sys.hasExternalPackage("hypre"):
+        mech = "vi_fieldsplit_mech_contact_"
+        out.update({mech + "pmg": "0", **{mech + k: v for k, v in BOOMERAMG.items()}})
     return out
 
 

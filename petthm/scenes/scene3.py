@@ -36,6 +36,7 @@ from ..matrixwells import MatrixWells, Perforation
 from ..mesh import Interior
 from ..monitors import Worst, contact_node_checks, contact_node_fields
 from ..params import param
+from ..solver import flow_heat_recipe
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
 from .fractured import ClosedUnderStress, FirstLayer, balances_of, first_layer, first_layer_param, tf_range
@@ -194,30 +195,29 @@ class InclinedPenny(ClosedUnderStress, Scene):
         return contact_solver_defaults(comm)
 
     def block_recipe(self):
-        """The heat fields before the mechanics (docs/solvers.md, "Scene 3 at
-        the default resolution"): the rock's thermal stress loads u, and the
-        heat balances do not contain u, so the sweep holds that coupling
-        exactly; Tf keeps its own block (its Schur term with respect to the
-        mechanics, through the wall nodes tied into it, tripled the count).
-        One step of 2e6 s at the default resolution: 180 Krylov iterations
-        against 321 with the mechanics first.
+        """The flow and heat fields {pm, pf, Tf, Tm} as one split before the
+        mechanics, by GMRES to 1e-3 on ILU(0), and the glued elasticity by
+        CG on its cycle (``solver.flow_heat_recipe``; docs/solvers.md, stop
+        40).  Block Gauss-Seidel over five splits dropped the coupling among
+        the flow and heat fields, which made 56 % of the Krylov count on
+        coarse Scene 3's finest level (stop 36); the one split keeps it.  The
+        heat before the mechanics, as before: the rock's thermal stress
+        loads u, and the heat balances do not contain u.  Four steps after
+        2 years, case 2, one run after the other beside a second run: coarse level 3
+        (P1 u, 70 677 unknowns) 5.6 against 71.5 Krylov iterations per
+        Newton iteration, KSPSolve 11.9 against 64.5 s; the default mesh
+        (P2 u, 119 862 unknowns) 6.0 against 49.8, 57.7 against 98.0 s.
 
-        Tf by ILU(0) (block Jacobi with ILU(0) per rank in parallel): at the
-        0.2-year steps the fracture's heat transport crosses many cells per
-        step, and one AMG cycle on it fails (the linear solve reached 500
-        iterations at dt = 6e6 s); with ILU(0) it converges (381 Krylov
-        iterations in 7 Newton).  Tf lives on the fracture surface only, so
-        its blocks stay small.  Tm by ILU(0) as well: late in the run (case 2
-        at 30 years, one 3.4e6-s step) one AMG cycle on Tm is the weak block
-        (188 Krylov iterations; Tm by LU 118, by ILU(0) 126), and the first
-        12 steps take 896 against 1 029.  Block Jacobi weakens with the
-        number of ranks on this 3D field (docs/solvers.md).
+        Six CG iterations with P1 u (four with P2 u): the elasticity's error
+        is what is left of the count.  Coarse levels 1-3 to 2 years: 2.8 /
+        3.5 / 4.1 Krylov iterations per Newton iteration with six (1.46x over
+        28x the unknowns), 2.9 / 3.8 / 4.9 with four, at the same cost
+        (11.6 against 11.3 s); on the default mesh six cost 11 % more time
+        (64.0 against 57.7 s) for 5.6 against 6.0.
 
         One Chebyshev step on the P2 level of the glued elasticity's
         p-multigrid (three elsewhere): that level's products are most of a
-        Krylov iteration's cost here, and one step costs ~10 % more
-        iterations for ~25 % less time (case 2, side by side: the first 12
-        steps 136 s against 175 s, four 0.2-year steps 155 s against 205 s).
+        Krylov iteration's cost here (stop 34).
 
         Newton to a scaled residual of 1e-9 (``contact_block_recipe``).  At
         0.2-year steps the second
@@ -227,13 +227,10 @@ class InclinedPenny(ClosedUnderStress, Scene):
         temperature 6e-11, max aperture increase 2e-9; mass balance 3.0e-8
         either way, energy balance 5e-11 against 5e-14) for 28 % of the
         time (92.5 s against 127.8 s; 563 against 781 Krylov iterations)."""
-        return {**contact_block_recipe(),
-                "vi_groups": "Tf=Tf,Tm=Tm,mech=u+lam+tau,pm=pm,pf=pf",
-                "vi_fieldsplit_Tf_pc_type": "bjacobi",
-                "vi_fieldsplit_Tf_sub_pc_type": "ilu",
-                "vi_fieldsplit_Tm_pc_type": "bjacobi",
-                "vi_fieldsplit_Tm_sub_pc_type": "ilu",
-                "vi_fieldsplit_mech_contact_mg_levels_ksp_max_it": "1"}
+        degree = self.run.fe_degree
+        return {**contact_block_recipe(), **flow_heat_recipe("flow_heat=pm+pf+Tf+Tm,mech=u+lam+tau", degree),
+                "vi_fieldsplit_mech_contact_mg_levels_ksp_max_it": "1",
+                **({"vi_fieldsplit_mech_contact_ksp_max_it": "6"} if degree == 1 else {})}
 
     def hit_times(self):
         """10, 20 and 30 years (the paper's Figs. 8-10), where the fields are written."""
