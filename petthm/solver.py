@@ -110,6 +110,10 @@ FLOW_HEAT_SPLIT = {"ksp_type": "gmres", "ksp_rtol": "1e-3", "ksp_max_it": "200",
                    "sub_pc_type": "ilu"}
 
 
+#: the options prefix of the glued elasticity's solve in the block recipe's mechanics split
+GLUED = "vi_fieldsplit_mech_contact_"
+
+
 def flow_heat_recipe(groups: str, degree: int) -> dict:
     """The block path's changes for the splits ``groups`` (``-vi_groups``),
     of which ``flow_heat`` holds the flow and heat fields and ``mech`` the
@@ -120,12 +124,11 @@ def flow_heat_recipe(groups: str, degree: int) -> dict:
     Block Gauss-Seidel between the flow and heat fields dropped the coupling
     that made the Krylov count, and one cycle's error in the elasticity
     multiplied it; each fix alone does little (docs/solvers.md, stops 39-40)."""
-    mech = "vi_fieldsplit_mech_contact_"
     out = {"vi_groups": groups,
-           **{mech + k: v for k, v in GLUED_CG.items()},
+           **{GLUED + k: v for k, v in GLUED_CG.items()},
            **{"vi_fieldsplit_flow_heat_" + k: v for k, v in FLOW_HEAT_SPLIT.items()}}
     if degree == 1 and PETSc.Sys.hasExternalPackage("hypre"):
-        out.update({mech + k: v for k, v in BOOMERAMG.items()})
+        out.update({GLUED + k: v for k, v in BOOMERAMG.items()})
     return out
 
 
@@ -147,8 +150,7 @@ def closed_fracture_recipe(degree: int) -> dict:
     stop 40)."""
     out = flow_heat_recipe("mech=u+lam+tau,pm=pm,flow_heat=pf+Tf+Tm", degree)
     if degree == 2 and PETSc.Sys.hasExternalPackage("hypre"):
-        mech = "vi_fieldsplit_mech_contact_"
-        out.update({mech + "pmg": "0", **{mech + k: v for k, v in BOOMERAMG.items()}})
+        out.update({GLUED + "pmg": "0", **{GLUED + k: v for k, v in BOOMERAMG.items()}})
     return out
 
 
