@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import materials as mt
 from .. import meshing, probes
+from ..analytic import series_sum
 from ..assembly import FieldScale
 from ..builders import ModelBuilder
 from ..constraints import Dirichlet
@@ -166,14 +167,14 @@ class Terzaghi(Scene):
         lam = _terms()
         Tv = t / self.t_c()
         e = np.exp(-lam ** 2 * Tv) * 2 / lam
-        return self.p0() * np.sum(np.sin(np.multiply.outer(z, lam) / L) * e, axis=-1)
+        return self.p0() * series_sum(z / L, lam, e, np.sin)
 
     def exact_grad_p(self, x, t):
         L = self.p.terzaghi_height
         z = L - x[..., 1]
         lam = _terms()
         e = np.exp(-lam ** 2 * t / self.t_c()) * 2 / L
-        dpdz = self.p0() * np.sum(np.cos(np.multiply.outer(z, lam) / L) * e, axis=-1)
+        dpdz = self.p0() * series_sum(z / L, lam, e, np.cos)
         grad = np.zeros(dpdz.shape + (x.shape[-1],))
         grad[..., 1] = -dpdz
         return grad
@@ -326,8 +327,7 @@ class Mandel(Scene):
         a = self.p.mandel_a
         an, e = self._series(t)
         w = np.sin(an) / (an - np.sin(an) * np.cos(an)) * e
-        return 2 * self.p0() * np.sum((np.cos(np.multiply.outer(x[..., 0], an) / a) - np.cos(an)) * w,
-                                      axis=-1)
+        return 2 * self.p0() * (series_sum(x[..., 0] / a, an, w, np.cos) - np.sum(np.cos(an) * w))
 
     def _uy_factor(self, t, rate=False):
         """u_y / y (or its time derivative)."""

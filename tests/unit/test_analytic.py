@@ -6,7 +6,7 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import erfc as scipy_erfc
 
-from petthm.analytic import erfc, increasing_root
+from petthm.analytic import erfc, increasing_root, series_sum
 
 
 def test_erfc_is_scipys_to_round_off():
@@ -28,3 +28,17 @@ def test_increasing_root_finds_the_roots_of_tan_x_equals_k_x(k):
     assert np.abs(roots - ref).max() < 3e-12
     # negative control: a bracket with no sign change gives its end, not a root
     assert abs(f(increasing_root(f, [0.5 * np.pi + 0.1], [0.5 * np.pi + 0.2])[0])) > 1.0
+
+
+def test_series_sum_equals_the_outer_product_sum_and_skips_decayed_terms():
+    """series_sum: term by term, the same sum as the points x terms product;
+    decayed terms (exp(-lam^2 T) at a late time) are left out without changing it."""
+    x = np.random.default_rng(0).uniform(0, 1, (50, 7))
+    lam = (2 * np.arange(400) + 1) * np.pi / 2
+    for T in (0.0, 1e-3, 0.5):
+        c = np.exp(-lam ** 2 * T) * 2 / lam
+        ref = np.sum(np.sin(np.multiply.outer(x, lam)) * c, axis=-1)
+        assert np.max(np.abs(series_sum(x, lam, c, np.sin) - ref)) <= 1e-13 * np.max(np.abs(ref))
+    calls = []
+    series_sum(x, lam, np.exp(-lam ** 2 * 0.5), lambda y: calls.append(1) or np.sin(y))
+    assert 0 < len(calls) < 10                      # at T = 0.5 a handful of terms remain
