@@ -59,12 +59,16 @@ def crack_half_model(path, c, L, crack_size, size=0.0, vertices=()):
                                       wells=list(vertices), well_size=crack_size)
 
 
+#: the contact scenes' VI Newton (the user's -snes_type wins)
+VI_NEWTON = "vinewtonrsls"
+
+
 def contact_solver_defaults(comm) -> dict:
     """A direct solve with the VI Newton; snes_atol 1e-12: one more Newton
     step (an iterative refinement) where the LU is less accurate than MUMPS
     (PETSc's own LU with reordering)."""
     from ..solver import direct_solver_defaults
-    return dict(direct_solver_defaults(comm), snes_type="vinewtonrsls", snes_atol="1e-12")
+    return dict(direct_solver_defaults(comm), snes_type=VI_NEWTON, snes_atol="1e-12")
 
 
 def contact_block_recipe() -> dict:

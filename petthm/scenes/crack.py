@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from petsc4py import PETSc
 
 from .. import materials as mt
 from .. import probes
@@ -23,8 +24,9 @@ from ..kernels import contact as ct
 from ..model import FRACTURE
 from ..monitors import fracture_vertices
 from ..params import param, with_defaults
+from ..solver import SSLS_CRACK_GAMG
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
-from .contact import (OPEN_TRACTION, contact_solver_defaults, crack_half_model, fracture_normal,
+from .contact import (OPEN_TRACTION, VI_NEWTON, contact_solver_defaults, crack_half_model, fracture_normal,
                       mechanics_model)
 
 
@@ -102,6 +104,12 @@ class _CrackScene(Scene):
 
     def solver_defaults(self, comm):
         return contact_solver_defaults(comm)
+
+    def block_recipe(self):
+        """With ``vinewtonssls``, GAMG's graph threshold 0.05 on the finest
+        level of the glued elasticity (``solver.SSLS_CRACK_GAMG``)."""
+        snes = PETSc.Options().getString("snes_type", VI_NEWTON)
+        return dict(SSLS_CRACK_GAMG) if snes == "vinewtonssls" else {}
 
 
 @register
