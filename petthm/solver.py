@@ -117,7 +117,7 @@ GLUED = "vi_fieldsplit_mech_contact_"
 #: the glued elasticity of a 2D crack under ``vinewtonssls``: GAMG's graph threshold 0.05
 #: on the finest level only (coarser levels 0), so the aggregation follows the strong
 #: couplings.  partial_opening, 1 022 to 124 164 unknowns: 6.2 / 7.4 / 7.8 Krylov per
-#: Newton at levels 1 / 3 / 5 against 9.9 / 15.9 / 24.9, the same wall time at level 5.
+#: Newton at levels 1 / 3 / 5 against 9.9 / 15.9 / 24.9; level 5 68 against 65 s wall.
 #: Not for ``vinewtonrsls`` (16.1 -> 11.8 there, but 1.5x the wall time: the
 #: hierarchy's set-up and cycle cost more) nor in 3D (stop 28: the Galerkin products
 #: filled; docs/solvers.md, stop 41)
