@@ -11,7 +11,7 @@ scipy.special (0.06 s of a small run's start, docs/performance.md).
 ``increasing_root``: the root of a function that changes sign once on each
 of several brackets, by bisection vectorised over the brackets.
 ``series_sum``: a Fourier series over many points, term by term (the
-Terzaghi and Mandel references, physics.md section 12's verification scenes).
+Terzaghi and Mandel references, verification.md section 6).
 """
 from __future__ import annotations
 
@@ -32,9 +32,10 @@ def series_sum(x, frequencies, coefficients, f) -> np.ndarray:
     skipping the terms whose coefficient is negligible (the decayed terms of
     a diffusion series at later times)."""
     c = np.asarray(coefficients, dtype=float)
+    smallest = NEGLIGIBLE_TERM * np.abs(c).max()
     out = np.zeros(np.shape(x))
     for w, k in zip(c, frequencies):
-        if abs(w) > NEGLIGIBLE_TERM * np.abs(c).max():
+        if abs(w) > smallest:
             out += w * f(x * k)
     return out
 
