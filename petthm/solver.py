@@ -114,6 +114,11 @@ FLOW_HEAT_SPLIT = {"ksp_type": "gmres", "ksp_rtol": "1e-3", "ksp_max_it": "200",
 GLUED = "vi_fieldsplit_mech_contact_"
 
 
+def glued(options: dict[str, str]) -> dict[str, str]:
+    """``options`` for the glued elasticity's solve (prefixed ``GLUED``)."""
+    return {GLUED + k: v for k, v in options.items()}
+
+
 #: the glued elasticity of a 2D crack under ``vinewtonssls``: GAMG's graph threshold 0.05
 #: on the finest level only (coarser levels 0), so the aggregation follows the strong
 #: couplings.  partial_opening, 1 022 to 124 164 unknowns: 6.2 / 7.4 / 7.8 Krylov per
@@ -121,7 +126,7 @@ GLUED = "vi_fieldsplit_mech_contact_"
 #: Not for ``vinewtonrsls`` (16.1 -> 11.8 there, but 1.5x the wall time: the
 #: hierarchy's set-up and cycle cost more) nor in 3D (stop 28: the Galerkin products
 #: filled; docs/solvers.md, stop 41)
-SSLS_CRACK_GAMG = {GLUED + "pc_gamg_threshold": "0.05", GLUED + "pc_gamg_threshold_scale": "0"}
+SSLS_CRACK_GAMG = {"pc_gamg_threshold": "0.05", "pc_gamg_threshold_scale": "0"}
 
 
 def flow_heat_recipe(groups: str, degree: int) -> dict:
@@ -135,10 +140,10 @@ def flow_heat_recipe(groups: str, degree: int) -> dict:
     that made the Krylov count, and one cycle's error in the elasticity
     multiplied it; each fix alone does little (docs/solvers.md, stops 39-40)."""
     out = {"vi_groups": groups,
-           **{GLUED + k: v for k, v in GLUED_CG.items()},
+           **glued(GLUED_CG),
            **{"vi_fieldsplit_flow_heat_" + k: v for k, v in FLOW_HEAT_SPLIT.items()}}
     if degree == 1 and PETSc.Sys.hasExternalPackage("hypre"):
-        out.update({GLUED + k: v for k, v in BOOMERAMG.items()})
+        out.update(glued(BOOMERAMG))
     return out
 
 
@@ -160,7 +165,7 @@ def closed_fracture_recipe(degree: int) -> dict:
     stop 40)."""
     out = flow_heat_recipe("mech=u+lam+tau,pm=pm,flow_heat=pf+Tf+Tm", degree)
     if degree == 2 and PETSc.Sys.hasExternalPackage("hypre"):
-        out.update({GLUED + "pmg": "0", **{GLUED + k: v for k, v in BOOMERAMG.items()}})
+        out.update(glued({"pmg": "0", **BOOMERAMG}))
     return out
 
 

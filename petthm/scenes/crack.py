@@ -24,7 +24,7 @@ from ..kernels import contact as ct
 from ..model import FRACTURE
 from ..monitors import fracture_vertices
 from ..params import param, with_defaults
-from ..solver import SSLS_CRACK_GAMG
+from ..solver import SSLS_CRACK_GAMG, glued
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
 from .contact import (OPEN_TRACTION, VI_NEWTON, contact_solver_defaults, crack_half_model, fracture_normal,
                       mechanics_model)
@@ -109,7 +109,7 @@ class _CrackScene(Scene):
         """With ``vinewtonssls``, GAMG's graph threshold 0.05 on the finest
         level of the glued elasticity (``solver.SSLS_CRACK_GAMG``)."""
         snes = PETSc.Options().getString("snes_type", VI_NEWTON)
-        return dict(SSLS_CRACK_GAMG) if snes == "vinewtonssls" else {}
+        return glued(SSLS_CRACK_GAMG) if snes == "vinewtonssls" else {}
 
 
 @register

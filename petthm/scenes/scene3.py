@@ -36,7 +36,7 @@ from ..matrixwells import MatrixWells, Perforation
 from ..mesh import Interior
 from ..monitors import Worst, contact_node_checks, contact_node_fields
 from ..params import param
-from ..solver import GLUED, flow_heat_recipe
+from ..solver import flow_heat_recipe, glued
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
 from .fractured import ClosedUnderStress, FirstLayer, balances_of, first_layer, first_layer_param, tf_range
@@ -229,7 +229,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
         time (92.5 s against 127.8 s; 563 against 781 Krylov iterations)."""
         degree = self.run.fe_degree
         return {**contact_block_recipe(), **flow_heat_recipe("flow_heat=pm+pf+Tf+Tm,mech=u+lam+tau", degree),
-                GLUED + "mg_levels_ksp_max_it": "1", **({GLUED + "ksp_max_it": "6"} if degree == 1 else {})}
+                **glued({"mg_levels_ksp_max_it": "1", **({"ksp_max_it": "6"} if degree == 1 else {})})}
 
     def hit_times(self):
         """10, 20 and 30 years (the paper's Figs. 8-10), where the fields are written."""
