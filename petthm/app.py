@@ -280,8 +280,9 @@ class Run:
         scene_defaults = dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm),
                               **(error_control_defaults(control) if run.dt_control == "error" else {}))
         scene_defaults = serial_plane_direct(scene_defaults, mesh.dim, self.comm.size, bool(model.bounds))
+        snes_type = PETSc.Options().getString("snes_type", scene_defaults["snes_type"])
         propose_defaults(solver_defaults_by_size(scene_defaults, model.has("u"), problem.X.getSize(),
-                                                 run.direct_max_unknowns, scene.block_recipe()))
+                                                 run.direct_max_unknowns, scene.block_recipe(snes_type)))
         self._pop("setup", st, t0)
         self.problem = problem
         return disc, problem, control, rs, setup.monitor

@@ -168,9 +168,11 @@ class Scene:
         (the user's options still win)."""
         return {}
 
-    def block_recipe(self) -> dict[str, str]:
+    def block_recipe(self, snes_type: str) -> dict[str, str]:
         """This scene's changes to the block preconditioner that the size rule
-        proposes (``solver.BLOCK_RECIPE``; the user's options still win)."""
+        proposes (``solver.BLOCK_RECIPE``; the user's options still win) for
+        the run's nonlinear method ``snes_type`` (the user's ``-snes_type``,
+        else the scene's default: ``app.Run.setup``)."""
         return {}
 
     def hit_times(self) -> list[float]:

@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from petsc4py import PETSc
 
 from .. import materials as mt
 from .. import probes
@@ -26,7 +25,7 @@ from ..monitors import fracture_vertices
 from ..params import param, with_defaults
 from ..solver import SSLS_CRACK_GAMG, glued
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
-from .contact import (OPEN_TRACTION, VI_NEWTON, contact_solver_defaults, crack_half_model, fracture_normal,
+from .contact import (OPEN_TRACTION, contact_solver_defaults, crack_half_model, fracture_normal,
                       mechanics_model)
 
 
@@ -105,11 +104,10 @@ class _CrackScene(Scene):
     def solver_defaults(self, comm):
         return contact_solver_defaults(comm)
 
-    def block_recipe(self):
+    def block_recipe(self, snes_type):
         """With ``vinewtonssls``, GAMG's graph threshold 0.05 on the finest
         level of the glued elasticity (``solver.SSLS_CRACK_GAMG``)."""
-        snes = PETSc.Options().getString("snes_type", VI_NEWTON)
-        return glued(SSLS_CRACK_GAMG) if snes == "vinewtonssls" else {}
+        return glued(SSLS_CRACK_GAMG) if snes_type == "vinewtonssls" else {}
 
 
 @register

@@ -194,7 +194,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
         # the Jacobian too much for a lagged one (GMRES hit 50 iterations on the coarse mesh)
         return contact_solver_defaults(comm)
 
-    def block_recipe(self):
+    def block_recipe(self, snes_type):
         """The flow and heat fields {pm, pf, Tf, Tm} as one split before the
         mechanics, by GMRES to 1e-3 on ILU(0), and the glued elasticity by
         CG on its cycle (``solver.flow_heat_recipe``; docs/solvers.md, stop

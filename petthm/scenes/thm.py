@@ -163,7 +163,7 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         # as GMRES's preconditioner (the factorisation dominates the run time)
         return dict(contact_solver_defaults(comm), snes_lag_preconditioner="10")
 
-    def block_recipe(self):
+    def block_recipe(self, snes_type):
         """``contact_block_recipe``: level 1 to 1e9 s, side by side
         (docs/solvers.md, stop 36): 217 against 314 Newton iterations, 19 123
         against 25 628 Krylov, 147 against 193 s; injection pressure,

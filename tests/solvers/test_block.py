@@ -214,10 +214,12 @@ def test_a_scene_changes_the_block_recipe():
 
     from petsc4py import PETSc
 
-    def recipe_of(scene, degree):
-        return REGISTRY[scene].block_recipe(SimpleNamespace(run=SimpleNamespace(fe_degree=degree)))
+    def recipe_of(scene, degree, snes_type="vinewtonrsls"):
+        return REGISTRY[scene].block_recipe(SimpleNamespace(run=SimpleNamespace(fe_degree=degree)), snes_type)
     load("partial_opening")
     assert recipe_of("partial_opening", 1) == {}           # vinewtonrsls: no graph threshold
+    ssls = recipe_of("partial_opening", 1, "vinewtonssls")
+    assert ssls["vi_fieldsplit_mech_contact_pc_gamg_threshold"] == "0.05"
     load("inclined_penny")
     order = recipe_of("inclined_penny", 2)
     # Scene 3: the flow and heat fields as one split, before the mechanics
