@@ -29,8 +29,9 @@ from .monitors import contact_node_fields, hit
 from .output import FieldWriter, History, write_summary
 from .problem import Problem
 from .scenes.base import REGISTRY
+from .recipes import solver_defaults_by_size
 from .solver import (SOLVER_DEFAULTS, StepControl, TimeStepper, error_control_defaults, failure_message,
-                     propose_defaults, serial_plane_direct, solver_defaults_by_size)
+                     propose_defaults, serial_plane_direct)
 
 #: options PETSc reads only at finalize or start-up; never "unused"
 _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",

@@ -170,7 +170,7 @@ class Scene:
 
     def block_recipe(self, snes_type: str) -> dict[str, str]:
         """This scene's changes to the block preconditioner that the size rule
-        proposes (``solver.BLOCK_RECIPE``; the user's options still win) for
+        proposes (``recipes.BLOCK_RECIPE``; the user's options still win) for
         the run's nonlinear method ``snes_type`` (the user's ``-snes_type``,
         else the scene's default: ``app.Run.setup``)."""
         return {}

@@ -23,7 +23,7 @@ from ..kernels import contact as ct
 from ..model import FRACTURE
 from ..monitors import fracture_vertices
 from ..params import param, with_defaults
-from ..solver import SSLS_CRACK_GAMG, glued
+from ..recipes import SSLS_CRACK_GAMG, glued
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
 from .contact import (OPEN_TRACTION, contact_solver_defaults, crack_half_model, fracture_normal,
                       mechanics_model)
@@ -106,7 +106,7 @@ class _CrackScene(Scene):
 
     def block_recipe(self, snes_type):
         """With ``vinewtonssls``, GAMG's graph threshold 0.05 on the finest
-        level of the glued elasticity (``solver.SSLS_CRACK_GAMG``)."""
+        level of the glued elasticity (``recipes.SSLS_CRACK_GAMG``)."""
         return glued(SSLS_CRACK_GAMG) if snes_type == "vinewtonssls" else {}
 
 

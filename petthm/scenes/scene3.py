@@ -36,7 +36,7 @@ from ..matrixwells import MatrixWells, Perforation
 from ..mesh import Interior
 from ..monitors import Worst, contact_node_checks, contact_node_fields
 from ..params import param
-from ..solver import flow_heat_recipe, glued
+from ..recipes import flow_heat_recipe, glued
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
 from .fractured import ClosedUnderStress, FirstLayer, balances_of, first_layer, first_layer_param, tf_range
@@ -197,7 +197,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
     def block_recipe(self, snes_type):
         """The flow and heat fields {pm, pf, Tf, Tm} as one split before the
         mechanics, by GMRES to 1e-3 on ILU(0), and the glued elasticity by
-        CG on its cycle (``solver.flow_heat_recipe``; docs/solvers.md, stop
+        CG on its cycle (``recipes.flow_heat_recipe``; docs/solvers.md, stop
         40).  Block Gauss-Seidel over five splits dropped the coupling among
         the flow and heat fields, which made 56 % of the Krylov count on
         coarse Scene 3's finest level (stop 36); the one split keeps it.  The

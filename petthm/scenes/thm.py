@@ -31,7 +31,7 @@ from ..errors import InputError
 from ..fields import Domain
 from ..monitors import FractureWells, contact_node_checks, fracture_vertices
 from ..params import CELSIUS, param
-from ..solver import closed_fracture_recipe
+from ..recipes import closed_fracture_recipe
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal
@@ -171,7 +171,7 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         2e-12 relative, mass balance 5.4e-7 either way.  The mechanics,
         then {pf, Tf, Tm} as one split, the glued elasticity by four CG
         iterations on its cycle (BoomerAMG with P1 u where PETSc has hypre)
-        (``solver.closed_fracture_recipe``, stops 38-39)."""
+        (``recipes.closed_fracture_recipe``, stops 38-39)."""
         return {**contact_block_recipe(), **closed_fracture_recipe(self.run.fe_degree)}
 
     # -- geometry -----------------------------------------------------------------------

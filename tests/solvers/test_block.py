@@ -156,7 +156,7 @@ def test_partial_opening_serial_and_parallel(tmp_path, method):
 def test_ssls_crack_takes_a_gamg_threshold(tmp_path):
     """partial_opening with vinewtonssls on the size rule's block path (9 136
     unknowns): the crack scenes' recipe gives the glued elasticity's GAMG a
-    graph threshold on its finest level (solver.SSLS_CRACK_GAMG).  Measured
+    graph threshold on its finest level (recipes.SSLS_CRACK_GAMG).  Measured
     7.4 Krylov per Newton against 15.9 without it (PETSc's unfiltered graph,
     threshold -1: the negative control; 3.26: 7.6 against 15.2), the same
     open zone and opening; vinewtonrsls is not given it."""
@@ -176,7 +176,7 @@ def test_ssls_crack_takes_a_gamg_threshold(tmp_path):
 def test_the_recipe_file_is_the_size_default():
     """options/solvers/block.opts and the recipe petthm proposes above
     -thm_direct_max_unknowns are the same options."""
-    from petthm.solver import BLOCK_RECIPE
+    from petthm.recipes import BLOCK_RECIPE
     opts = {}
     for line in open(f"{ROOT}/options/solvers/block.opts"):
         line = line.split("#")[0].split()
@@ -209,7 +209,7 @@ def test_a_scene_changes_the_block_recipe():
     proposed."""
     from petthm.scenes import load
     from petthm.scenes.base import REGISTRY
-    from petthm.solver import BLOCK_RECIPE, solver_defaults_by_size
+    from petthm.recipes import BLOCK_RECIPE, solver_defaults_by_size
     from types import SimpleNamespace
 
     from petsc4py import PETSc
@@ -252,6 +252,12 @@ def test_a_scene_changes_the_block_recipe():
     hypre = PETSc.Sys.hasExternalPackage("hypre")
     assert scene2_recipe(2).get(amg) == ("hypre" if hypre else None)
     assert scene2_recipe(2).get("vi_fieldsplit_mech_contact_pmg") == ("0" if hypre else None)
+    # and there without aggressive coarsening, by eight CG iterations, no contact-Schur term
+    p2_changes = {"vi_fieldsplit_mech_contact_pc_hypre_boomeramg_agg_nl": "0",
+                  "vi_fieldsplit_mech_contact_ksp_max_it": "8", "vi_contact_schur": "off"}
+    without = dict.fromkeys(p2_changes) | {"vi_fieldsplit_mech_contact_ksp_max_it": "4"}  # GAMG p-multigrid
+    assert all(scene2_recipe(2).get(k) == v for k, v in (p2_changes if hypre else without).items())
+    assert all(scene2.get(k) != v for k, v in p2_changes.items())           # P1 u: unchanged
     scene3_p1 = recipe_of("inclined_penny", 1)
     assert scene3_p1.get(amg) == scene2.get(amg) and amg not in order
     # six CG iterations with P1 u (coarse Scene 3's levels), four with P2 u
@@ -314,3 +320,31 @@ def test_scene2_p2_block_path_gives_the_direct_solution(tmp_path):
     worst = max(abs(block[k] - direct[k]) / abs(direct[k]) for k in keys)
     print(f"Scene 2 P2, block path against the direct solve: {worst:.1e}")
     assert worst <= 1e-8
+
+
+@pytest.mark.slow
+def test_scene2_p2_recipe_holds_the_count_at_long_steps(tmp_path):
+    """Scene 2 with P2 u (coarse: 57 k unknowns) to 3e7 s, its steps
+    growing to 1e7 s, on the size rule's block path where PETSc has hypre:
+    the recipe's P2 changes (``recipes.P2_GLUED_AMG``: BoomerAMG without
+    aggressive coarsening, eight CG iterations; ``-vi_contact_schur off``)
+    against the recipe before them (the negative control).  Measured: 221
+    against 428 Krylov iterations in 28 Newton iterations each, the same
+    steps; ~200 s a run (docs/solvers.md, stop 42)."""
+    from petsc4py import PETSc
+    if not PETSc.Sys.hasExternalPackage("hypre"):
+        pytest.skip("PETSc without hypre: Scene 2's P2 recipe keeps the p-multigrid")
+    common = ("-options_file", f"{ROOT}/options/scenes/penny_impermeable.opts", "-thm_fe_degree", 2,
+              "-thm_scene2_fracture_size", 40, "-thm_scene2_well_size", 20, "-thm_direct_max_unknowns", 0,
+              "-thm_dt_initial", 1e7, "-thm_final_time", 3e7)
+    glued = "-vi_fieldsplit_mech_contact_"
+    before = ("-vi_contact_schur", "all", glued + "pc_hypre_boomeramg_agg_nl", 1, glued + "ksp_max_it", 4)
+    _, s = run_petthm("penny_impermeable", tmp_path / "recipe", *common)
+    _, c = run_petthm("penny_impermeable", tmp_path / "control", *common, *before)
+    per = {k: r["ksp_iterations"] / r["snes_iterations"] for k, r in (("recipe", s), ("control", c))}
+    print("Krylov per Newton", per)
+    assert s["status"] == c["status"] == "completed" and s["steps"] == c["steps"]
+    assert s["rejected_steps"] == 0
+    assert per["recipe"] <= 0.6 * per["control"]
+    for key in ("injection_pressure", "production_temperature", "lam_injector"):
+        assert s[key] == pytest.approx(c[key], rel=1e-7), key
