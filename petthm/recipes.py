@@ -9,6 +9,14 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 
+def prefixed(prefix: str, options: dict[str, str]) -> dict[str, str]:
+    """``options`` under the options prefix ``prefix`` (a split's or a solve's)."""
+    return {prefix + k: v for k, v in options.items()}
+
+
+#: a split's solve by one application of GAMG (the recipe's pm, pf, Tf and Tm)
+GAMG_ONCE = {"ksp_type": "preonly", "pc_type": "gamg"}
+
 #: the block preconditioner of options/solvers/block.opts (docs/solvers.md), proposed by
 #: ``solver_defaults_by_size`` for large problems with displacement; a test keeps the two equal
 BLOCK_RECIPE = {
@@ -24,8 +32,7 @@ BLOCK_RECIPE = {
     "vi_fieldsplit_mech_ksp_type": "preonly",
     "vi_fieldsplit_mech_pc_type": "python",
     "vi_fieldsplit_mech_pc_python_type": "petthm.contactpc.ContactNullspacePC",
-    **{f"vi_fieldsplit_{f}_{k}": v for f in ("pm", "pf", "Tf", "Tm")
-       for k, v in (("ksp_type", "preonly"), ("pc_type", "gamg"))},
+    **{k: v for f in ("pm", "pf", "Tf", "Tm") for k, v in prefixed(f"vi_fieldsplit_{f}_", GAMG_ONCE).items()},
 }
 
 
@@ -61,7 +68,7 @@ GLUED = "vi_fieldsplit_mech_contact_"
 
 def glued(options: dict[str, str]) -> dict[str, str]:
     """``options`` for the glued elasticity's solve (prefixed ``GLUED``)."""
-    return {GLUED + k: v for k, v in options.items()}
+    return prefixed(GLUED, options)
 
 
 #: the glued elasticity of a 2D crack under ``vinewtonssls``: GAMG's graph threshold 0.05
@@ -86,7 +93,7 @@ def flow_heat_recipe(groups: str, degree: int) -> dict:
     multiplied it; each fix alone does little (docs/solvers.md, stops 39-40)."""
     out = {"vi_groups": groups,
            **glued(GLUED_CG),
-           **{"vi_fieldsplit_flow_heat_" + k: v for k, v in FLOW_HEAT_SPLIT.items()}}
+           **prefixed("vi_fieldsplit_flow_heat_", FLOW_HEAT_SPLIT)}
     if degree == 1 and PETSc.Sys.hasExternalPackage("hypre"):
         out.update(glued(BOOMERAMG))
     return out
