@@ -34,6 +34,11 @@ SNES_DIVERGED_NAN = getattr(PETSc.SNES.ConvergedReason, "DIVERGED_FNORM_NAN", No
     or PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_NANORINF
 
 
+#: GAMG's option for the number of levels it coarsens aggressively (graph squaring in
+#: PETSc 3.18, renamed ``pc_gamg_aggressive_coarsening`` in 3.19, MIS-2 by default since)
+GAMG_AGGRESSIVE_LEVELS = "pc_gamg_square_graph" if VERSION < (3, 19) else "pc_gamg_aggressive_coarsening"
+
+
 def version_string() -> str:
     """'3.18.5'-style PETSc version of the loaded library."""
     return ".".join(str(v) for v in VERSION)

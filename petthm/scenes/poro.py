@@ -23,6 +23,7 @@ from ..kernels import poroelastic as pe
 from ..model import MATRIX
 from ..monitors import hit
 from ..params import param
+from ..recipes import PMG_P1_NOT_AGGRESSIVE, glued
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, register, zero
 
@@ -131,6 +132,14 @@ class Terzaghi(Scene):
     time = TimeDefaults(final_time=1300.0, dt_initial=0.0648, dt_growth=1.05, dt_max=2.0, mesh_size=0.5)
     history_columns = ("settlement", "settlement_exact", "p_base", "p_base_exact", "p_l2_rel", "p_overshoot")
     TV = (0.01, 0.1, 0.5, 1.0)
+
+    def block_recipe(self, snes_type):
+        """The p-multigrid's P1 level without GAMG's aggressive coarsening
+        (``recipes.PMG_P1_NOT_AGGRESSIVE``): item 9's weak scaling 1.10x
+        against 1.41x over 1-8 ranks; to 2 t_c on three levels 8.6 / 8.8 /
+        9.6 against 10.1 / 11.1 / 12.4 Krylov iterations per Newton
+        iteration (docs/solvers.md, stop 43)."""
+        return glued(PMG_P1_NOT_AGGRESSIVE)
 
     def boundaries(self):
         p = self.p
