@@ -75,10 +75,10 @@ def glued(options: dict[str, str]) -> dict[str, str]:
 
 #: the p-multigrid's P1 level (``pmg``, P2 u) by GAMG without aggressive coarsening (PETSc's
 #: default: one level; the option's name is the PETSc version's, ``compat.GAMG_AGGRESSIVE_LEVELS``).
-#: 3D Terzaghi, item 9's weak scaling on 1 / 2 / 4 / 8 ranks: 9.2 / 9.5 / 10.0 / 10.1 Krylov
-#: iterations per Newton iteration (1.10x) against 11.2 / 13.0 / 14.3 / 15.8 (1.41x), 7 % more
-#: wall time on one rank.  Not for Scene 3's default mesh: the same count there (335 against
-#: 334 in six 0.2-year steps) for ~10 % more solve time (docs/solvers.md, stop 43)
+#: 3D Terzaghi, item 9's weak scaling on 1 / 2 / 4 / 8 ranks: 9.2 / 9.6 / 10.2 / 10.2 Krylov
+#: iterations per Newton iteration (1.11x) against 11.2 / 13.0 / 14.3 / 15.8 (1.41x), 7 % more
+#: wall time on one rank.  Not for Scene 3's default mesh: the same count there (335 / 338
+#: against 334 / 334 in six 0.2-year steps) for 14 % more CPU time (docs/solvers.md, stop 43)
 PMG_P1_NOT_AGGRESSIVE = {"mg_coarse_" + compat.GAMG_AGGRESSIVE_LEVELS: "0"}
 
 #: the glued elasticity of a 2D crack under ``vinewtonssls``: GAMG's graph threshold 0.05

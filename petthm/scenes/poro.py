@@ -135,7 +135,7 @@ class Terzaghi(Scene):
 
     def block_recipe(self, snes_type):
         """The p-multigrid's P1 level without GAMG's aggressive coarsening
-        (``recipes.PMG_P1_NOT_AGGRESSIVE``): item 9's weak scaling 1.10x
+        (``recipes.PMG_P1_NOT_AGGRESSIVE``): item 9's weak scaling 1.11x
         against 1.41x over 1-8 ranks; to 2 t_c on three levels 8.6 / 8.8 /
         9.6 against 10.1 / 11.1 / 12.4 Krylov iterations per Newton
         iteration (docs/solvers.md, stop 43)."""
