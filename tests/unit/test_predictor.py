@@ -51,12 +51,19 @@ def test_a_start_that_is_not_the_last_state_is_left_alone():
 
 def test_the_predictor_cuts_newton_iterations_and_keeps_the_result(tmp_path):
     """Scene 2 coarse (layered mesh, the block path) to 1e9 s: the same
-    injection pressure and production temperature to 1e-8 with fewer Newton
-    and Krylov iterations than from the last state (measured: 3.0e-10;
-    Newton 201 against 217, Krylov 1 564 against 2 149)."""
+    injection pressure and production temperature to 1e-10 with fewer Newton
+    and Krylov iterations than from the last state.  Both runs converge
+    Newton to -snes_atol 1e-11 (the block path's default is 1e-9): at 1e-9 the
+    two converged states differ inside that tolerance, by 3.0e-10 on one
+    machine and 1.2e-8 on another (stop 43's, with stop 42's code too: the
+    round-off differs; its source was not traced), which says nothing
+    about the predictor.
+    Measured at 1e-11: 9.1e-13; Newton 220 against 252, Krylov 2 181
+    against 2 878."""
     from conftest import ROOT, run_petthm
     opts = ("-options_file", f"{ROOT}/options/scenes/penny_impermeable.opts", "-thm_scene2_fracture_size", 40,
-            "-thm_scene2_well_size", 20, "-thm_final_time", 1e9, "-thm_direct_max_unknowns", 0)
+            "-thm_scene2_well_size", 20, "-thm_final_time", 1e9, "-thm_direct_max_unknowns", 0,
+            "-snes_atol", 1e-11, "-ksp_atol", 1e-12)
     runs = {p: run_petthm("penny_impermeable", tmp_path / p, *opts, "-thm_predictor", p)[1]
             for p in ("linear", "none")}
     lin, none = runs["linear"], runs["none"]
@@ -65,6 +72,6 @@ def test_the_predictor_cuts_newton_iterations_and_keeps_the_result(tmp_path):
     worst = max(abs(lin[k] - none[k]) / abs(none[k]) for k in keys)
     print(f"predictor: Newton {lin['snes_iterations']} against {none['snes_iterations']}, Krylov "
           f"{lin['ksp_iterations']} against {none['ksp_iterations']}, results {worst:.1e}")
-    assert worst <= 1e-8
+    assert worst <= 1e-10
     assert lin["snes_iterations"] < none["snes_iterations"]
     assert lin["ksp_iterations"] < 0.85 * none["ksp_iterations"]
