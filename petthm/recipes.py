@@ -34,7 +34,10 @@ BLOCK_RECIPE = {
     "vi_fieldsplit_mech_ksp_type": "preonly",
     "vi_fieldsplit_mech_pc_type": "python",
     "vi_fieldsplit_mech_pc_python_type": "petthm.contactpc.ContactNullspacePC",
-    **{k: v for f in ("pm", "pf", "Tf", "Tm") for k, v in prefixed(f"vi_fieldsplit_{f}_", GAMG_ONCE).items()},
+    **prefixed("vi_fieldsplit_pm_", GAMG_ONCE),
+    **prefixed("vi_fieldsplit_pf_", GAMG_ONCE),
+    **prefixed("vi_fieldsplit_Tf_", GAMG_ONCE),
+    **prefixed("vi_fieldsplit_Tm_", GAMG_ONCE),
 }
 
 

@@ -138,8 +138,9 @@ class Terzaghi(Scene):
         (``recipes.PMG_P1_NOT_AGGRESSIVE``): item 9's weak scaling 1.11x
         against 1.41x over 1-8 ranks; to 2 t_c on three levels 8.6 / 8.8 /
         9.6 against 10.1 / 11.1 / 12.4 Krylov iterations per Newton
-        iteration (docs/solvers.md, stop 43)."""
-        return glued(PMG_P1_NOT_AGGRESSIVE)
+        iteration (docs/solvers.md, stop 43).  P1 u has no p-multigrid, so
+        nothing is proposed there."""
+        return glued(PMG_P1_NOT_AGGRESSIVE) if self.run.fe_degree == 2 else {}
 
     def boundaries(self):
         p = self.p

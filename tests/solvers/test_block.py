@@ -290,6 +290,7 @@ def test_a_scene_changes_the_block_recipe():
     from petthm.compat import GAMG_AGGRESSIVE_LEVELS
     load("terzaghi")
     assert recipe_of("terzaghi", 2) == {f"vi_fieldsplit_mech_contact_mg_coarse_{GAMG_AGGRESSIVE_LEVELS}": "0"}
+    assert recipe_of("terzaghi", 1) == {}                  # P1 u: no p-multigrid, nothing to propose
     assert not any("_mg_coarse_" in k for r in (order, scene2, scene2_recipe(2)) for k in r)
 
 
