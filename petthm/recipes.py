@@ -143,6 +143,18 @@ def closed_fracture_recipe(degree: int) -> dict:
     return out
 
 
+def flow_heat_first_recipe(degree: int) -> dict:
+    """The block path's changes for a scene with every field (u, lam, pm, pf,
+    Tf, Tm): {pm, pf, Tf, Tm} as one split before the mechanics
+    (``flow_heat_recipe``), the glued elasticity by six CG iterations with
+    P1 u (four with P2 u) and one Chebyshev step on its p-multigrid's P2
+    level.  The heat before the mechanics: the rock's thermal stress loads
+    u, and the heat balances do not contain u.  Scene 3 (``Scene3.block_recipe``
+    has its measurements) and the coupled MMS (``CoupledMMS.block_recipe``)."""
+    return {**flow_heat_recipe("flow_heat=pm+pf+Tf+Tm,mech=u+lam+tau", degree),
+            **glued({"mg_levels_ksp_max_it": "1", **({"ksp_max_it": "6"} if degree == 1 else {})})}
+
+
 def solver_defaults_by_size(scene_defaults: dict[str, str], has_displacement: bool, unknowns: int,
                             direct_max: int, block: dict[str, str] | None = None) -> dict[str, str]:
     """The scene's solver defaults, with the block preconditioner in place of

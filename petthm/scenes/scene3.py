@@ -36,7 +36,7 @@ from ..matrixwells import MatrixWells, Perforation
 from ..mesh import Interior
 from ..monitors import Worst, contact_node_checks, contact_node_fields
 from ..params import param
-from ..recipes import flow_heat_recipe, glued
+from ..recipes import flow_heat_first_recipe
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
 from .fractured import ClosedUnderStress, FirstLayer, balances_of, first_layer, first_layer_param, tf_range
@@ -197,8 +197,8 @@ class InclinedPenny(ClosedUnderStress, Scene):
     def block_recipe(self, snes_type):
         """The flow and heat fields {pm, pf, Tf, Tm} as one split before the
         mechanics, by GMRES to 1e-3 on ILU(0), and the glued elasticity by
-        CG on its cycle (``recipes.flow_heat_recipe``; docs/solvers.md, stop
-        40).  Block Gauss-Seidel over five splits dropped the coupling among
+        CG on its cycle (``recipes.flow_heat_first_recipe``; docs/solvers.md,
+        stop 40).  Block Gauss-Seidel over five splits dropped the coupling among
         the flow and heat fields, which made 56 % of the Krylov count on
         coarse Scene 3's finest level (stop 36); the one split keeps it.  The
         heat before the mechanics, as before: the rock's thermal stress
@@ -227,9 +227,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
         temperature 6e-11, max aperture increase 2e-9; mass balance 3.0e-8
         either way, energy balance 5e-11 against 5e-14) for 28 % of the
         time (92.5 s against 127.8 s; 563 against 781 Krylov iterations)."""
-        degree = self.run.fe_degree
-        return {**contact_block_recipe(), **flow_heat_recipe("flow_heat=pm+pf+Tf+Tm,mech=u+lam+tau", degree),
-                **glued({"mg_levels_ksp_max_it": "1", **({"ksp_max_it": "6"} if degree == 1 else {})})}
+        return {**contact_block_recipe(), **flow_heat_first_recipe(self.run.fe_degree)}
 
     def hit_times(self):
         """10, 20 and 30 years (the paper's Figs. 8-10), where the fields are written."""
