@@ -31,8 +31,8 @@ DEFAULT_CASES = [f"{d}:{p}:{s}:{g}" for d in (2, 3) for p in (1, 2) for s in ("o
 
 def slope(h, e, last: bool = False) -> float:
     h, e = np.asarray(h, dtype=float), np.asarray(e, dtype=float)
-    if np.any(e <= 0):
-        return float("nan")
+    if len(e) < 2 or np.any(e <= 0):
+        return float("nan")              # one mesh (--sizes H): no slope
     if last:
         return float(np.log(e[-2] / e[-1]) / np.log(h[-2] / h[-1]))
     return float(np.polyfit(np.log(h), np.log(e), 1)[0])

@@ -148,7 +148,7 @@ class CoupledMMS(Scene):
         """Scene 3's recipe, which has the same fields (``recipes.flow_heat_first_recipe``
         and ``contact_block_recipe``).  ``BLOCK_RECIPE``'s five splits stop
         at 500 Krylov iterations in every linear solve of the first step
-        (3D P1, mesh size 0.04, 61 217 unknowns, open and closed; stop 44).
+        (3D P1, mesh size 0.04, 60 207 unknowns, open and closed; stop 44).
         With this recipe both states complete, with the direct solve's
         steps and its errors against the exact solution to six digits
         (docs/coupled_mms.md)."""
