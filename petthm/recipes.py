@@ -149,7 +149,7 @@ def flow_heat_first_recipe(degree: int) -> dict:
     (``flow_heat_recipe``), the glued elasticity by six CG iterations with
     P1 u (four with P2 u) and one Chebyshev step on its p-multigrid's P2
     level.  The heat before the mechanics: the rock's thermal stress loads
-    u, and the heat balances do not contain u.  Scene 3 (``Scene3.block_recipe``
+    u, and the heat balances do not contain u.  Scene 3 (``InclinedPenny.block_recipe``
     has its measurements) and the coupled MMS (``CoupledMMS.block_recipe``)."""
     return {**flow_heat_recipe("flow_heat=pm+pf+Tf+Tm,mech=u+lam+tau", degree),
             **glued({"mg_levels_ksp_max_it": "1", **({"ksp_max_it": "6"} if degree == 1 else {})})}
