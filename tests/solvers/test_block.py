@@ -18,6 +18,19 @@ def krylov_per_newton(outdir) -> list[float]:
     return [int(r["ksp_its"]) / max(int(r["snes_its"]), 1) for r in rows]
 
 
+def largest_krylov_per_newton(tmp_path, scene, common, variants) -> dict[str, float]:
+    """Run ``scene`` with the options ``common`` and each variant's extra
+    options (``{name: options}``); each must complete.  Returns the largest
+    Krylov count per Newton iteration of any step, by variant."""
+    its = {}
+    for name, extra in variants.items():
+        _, s = run_petthm(scene, tmp_path / name, *common, *extra)
+        assert s["status"] == "completed"
+        its[name] = max(krylov_per_newton(tmp_path / name))
+    print("largest Krylov per Newton", its)
+    return its
+
+
 def test_fixed_stress_schur_approximation(tmp_path):
     """3D Terzaghi with incompressible fluid and grains (alpha = 1, c_f = 0:
     the pressure block has no storage, the Schur complement's storage is
@@ -27,12 +40,8 @@ def test_fixed_stress_schur_approximation(tmp_path):
     common = ("-options_file", f"{ROOT}/options/scenes/terzaghi.opts", *BLOCK, *EXACT_SUBSOLVES,
               "-thm_terzaghi_dim", 3, "-thm_mesh_size", 1, "-thm_final_time", 5,
               "-thm_fluid_compressibility", 0, "-thm_rock_biot_coefficient", 1)
-    its = {}
-    for name, extra in (("fixed_stress", ()), ("control", ("-vi_fixed_stress", 0))):
-        _, s = run_petthm("terzaghi", tmp_path / name, *common, *extra)
-        assert s["status"] == "completed"
-        its[name] = max(krylov_per_newton(tmp_path / name))
-    print("largest Krylov per Newton", its)
+    its = largest_krylov_per_newton(tmp_path, "terzaghi", common,
+                                    {"fixed_stress": (), "control": ("-vi_fixed_stress", 0)})
     assert its["fixed_stress"] <= 13
     assert its["control"] >= 1.6 * its["fixed_stress"]
 
@@ -332,12 +341,8 @@ def test_coupled_mms_takes_the_flow_and_heat_split(tmp_path):
     from petthm.recipes import BLOCK_RECIPE
     common = ("-thm_coupled_mms_dim", 3, "-thm_fe_degree", 1, "-thm_coupled_mms_supg", 1,
               "-thm_mesh_size", 0.12, "-thm_final_time", 0.5, "-thm_direct_max_unknowns", 0)
-    its = {}
-    for name, extra in (("recipe", ()), ("control", ("-vi_groups", BLOCK_RECIPE["vi_groups"]))):
-        _, s = run_petthm("coupled_mms", tmp_path / name, *common, *extra)
-        assert s["status"] == "completed"
-        its[name] = max(krylov_per_newton(tmp_path / name))
-    print("largest Krylov per Newton", its)
+    its = largest_krylov_per_newton(tmp_path, "coupled_mms", common,
+                                    {"recipe": (), "control": ("-vi_groups", BLOCK_RECIPE["vi_groups"])})
     assert its["recipe"] <= 10
     assert its["control"] >= 4 * its["recipe"]
 

@@ -5,22 +5,29 @@ import re
 import sys
 
 
-def summary(path):
-    text = open(path).read()
-    dofs = sum(int(v) for v in re.findall(r"\w+=(\d+)", re.search(r"dofs (.*)", text).group(1)))
+def counts(text: str) -> dict:
+    """A petthm log's unknowns, (steps, rejected, wall) when it completed, Newton and Krylov
+    iterations, the largest Krylov per Newton in one step and the linear solves that failed."""
+    dofs = re.search(r"dofs (.*)", text)
     steps = re.findall(r"newton\s+(\d+)\s+krylov\s+(\d+)", text)
-    newton = sum(int(n) for n, _ in steps)
-    krylov = sum(int(k) for _, k in steps)
     done = re.search(r"in (\d+) steps \((\d+) rejected\), ([\d.]+) s", text)
-    worst = max((int(k) / int(n) for n, k in steps if int(n)), default=float("nan"))
-    diverged = len(re.findall(r"Linear solve did not converge", text))
-    return (f"| {path.split('/')[-1]} | {dofs} | {done.group(1) if done else '-'} | "
-            f"{done.group(2) if done else '-'} | {newton} | {krylov} | {krylov / max(newton, 1):.2f} | "
-            f"{worst:.1f} | {done.group(3) if done else '-'} | {diverged} |")
+    return dict(n=sum(int(v) for v in re.findall(r"=(\d+)", dofs.group(1))) if dofs else 0,
+                done=done.groups() if done else None,
+                newton=sum(int(n) for n, _ in steps), krylov=sum(int(k) for _, k in steps),
+                worst=max((int(k) / int(n) for n, k in steps if int(n)), default=float("nan")),
+                bad=text.count("Linear solve did not converge"))
 
 
-print("| run | unknowns | steps | rejected | Newton | Krylov | Krylov/Newton | largest in a step | wall s "
-      "| not converged |")
-print("|---|---|---|---|---|---|---|---|---|---|")
-for p in sys.argv[1:]:
-    print(summary(p))
+def summary(path):
+    c = counts(open(path).read())
+    steps, rejected, wall = c["done"] or ("-", "-", "-")
+    return (f"| {path.split('/')[-1]} | {c['n']} | {steps} | {rejected} | {c['newton']} | {c['krylov']} | "
+            f"{c['krylov'] / max(c['newton'], 1):.2f} | {c['worst']:.1f} | {wall} | {c['bad']} |")
+
+
+if __name__ == "__main__":
+    print("| run | unknowns | steps | rejected | Newton | Krylov | Krylov/Newton | largest in a step | wall s "
+          "| not converged |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for p in sys.argv[1:]:
+        print(summary(p))

@@ -7,25 +7,18 @@ reported beside it.
 Usage: sweep_table.py OUTDIR"""
 import csv
 import os
-import re
 import sys
+
+from levels_table import counts
 
 SKIP = {"step", "snes_its", "ksp_its", "wall"}
 
 
 def run(out, scene, path):
-    text = open(os.path.join(out, f"{scene}_{path}.txt")).read()
-    dofs = re.search(r"dofs (.*)", text)
-    n = sum(int(v) for v in re.findall(r"=(\d+)", dofs.group(1))) if dofs else 0
-    done = re.search(r"in (\d+) steps \((\d+) rejected\)", text)
-    steps = re.findall(r"newton\s+(\d+)\s+krylov\s+(\d+)", text)
-    rows = []
+    c = counts(open(os.path.join(out, f"{scene}_{path}.txt")).read())
     hist = os.path.join(out, scene, path, "history.csv")
-    if os.path.exists(hist):
-        rows = list(csv.DictReader(open(hist)))
-    return dict(n=n, done=done.groups() if done else None, newton=sum(int(a) for a, _ in steps),
-                krylov=sum(int(b) for _, b in steps), bad=text.count("Linear solve did not converge"),
-                last=rows[-1] if rows else {})
+    rows = list(csv.DictReader(open(hist))) if os.path.exists(hist) else []
+    return dict(c, last=rows[-1] if rows else {})
 
 
 def difference(a, b):
