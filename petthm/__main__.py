@@ -19,11 +19,21 @@ def _scene_help(name):
     cls = REGISTRY[name]
     lines = [f"{name}: {cls.description}", "", "parameters (-option  default  unit  meaning):",
              P.help_text((P.RunParams,) + tuple(cls.parameters)), "",
+             _water_help(cls),
              f"time defaults: final {cls.time.final_time:g} s, first step {cls.time.dt_initial:g} s, "
              f"growth {cls.time.dt_growth:g}, largest step {cls.time.dt_max:g} s",
              "solver: any PETSc option (-ts_*, -snes_*, -ksp_*, -pc_*, -fieldsplit_*), "
              "or -options_file options/solvers/*.opts"]
     return "\n".join(lines)
+
+
+def _water_help(cls) -> str:
+    """How the scene's pressures are given, and the pressure of its water without a pressure field."""
+    kind = "gauge (absolute = gauge + 101 325 Pa)" if cls.gauge_pressure else "absolute"
+    text = f"pressures: {kind}; [kind]: what an option sets (a restart keeps physics, mesh, discretisation)"
+    if cls.water_pressure is not None:
+        text += f"; the scene's water is at {cls.water_pressure:g} Pa (no pressure field)"
+    return text
 
 
 def _list_help():
@@ -42,20 +52,77 @@ def _fail(msg: str, rank: int) -> int:
     return 2
 
 
-def _bad_options_line(path: str) -> str | None:
+def _is_option(token: str) -> bool:
+    """A token that names an option (-name), not a value (a word, or a
+    number such as -5 or -1e3, which PETSc reads as a value too)."""
+    if not token.startswith("-") or token == "-":
+        return False
+    try:
+        float(token)
+    except ValueError:
+        return True
+    return False
+
+
+def _extra_value_error(name: str, values: list[str], where: str) -> str:
+    return (f"{where}option {name} takes one value, not {len(values)} ({' '.join(values)}): a list is "
+            "written with commas and no spaces (-name a,b,c)")
+
+
+def check_arguments(args: list[str]) -> str | None:
+    """The first problem of the command line after the scene, or None: each
+    argument is an option (-name) followed by at most one value.  A stray
+    word is refused (PETSc would ignore it), with "did you mean
+    -options_file" for a file; a second value too (PETSc would drop it)."""
+    i = 0
+    while i < len(args):
+        token = args[i]
+        if not _is_option(token):
+            hint = f" (did you mean -options_file {token}?)" if os.path.isfile(token) or \
+                token.endswith(".opts") else ""
+            return (f"unexpected argument '{token}'{hint}: arguments after the scene are options, "
+                    "-name [value]")
+        j = i + 1
+        while j < len(args) and not _is_option(args[j]):
+            j += 1
+        if j - i > 2:
+            return _extra_value_error(token, args[i + 1:j], "")
+        i = j
+    return None
+
+
+def _tokens(text: str) -> list[str]:
+    """The words of an options-file line as PETSc splits it (a double-quoted
+    string is one word)."""
+    import re
+    return [t.strip('"') for t in re.findall(r'"[^"]*"|\S+', text)]
+
+
+def bad_options_file(path: str, seen: tuple = ()) -> str | None:
     """A one-line error for the first line of an options file that PETSc
-    would refuse at start-up (a line is '-name [value]' or 'alias ...'; '#'
-    starts a comment), or None."""
+    would refuse or cut short, or None: a line is '-name [value]' ('#' starts
+    a comment, 'alias' lines are PETSc's); a second value on a line is an
+    error (PETSc would drop it silently); -options_file lines are followed."""
     try:
         with open(path, errors="replace") as f:
             lines = f.read().splitlines()
     except OSError as e:
         return f"options file '{path}' cannot be read ({e.strerror}) (-options_file)"
     for n, line in enumerate(lines, 1):
-        text = line.split("#", 1)[0].strip()
-        if text and not text.startswith(("-", "alias", "!", "%")):
-            return (f"options file '{path}' line {n}: '{text[:40]}' is not an option "
-                    "(a line is '-name [value]'; '#' starts a comment) (-options_file)")
+        words = _tokens(line.split("#", 1)[0])
+        if not words or words[0] in ("alias", "!", "%") or words[0].startswith(("!", "%")):
+            continue
+        where = f"options file '{path}' line {n}: "
+        if not _is_option(words[0]):
+            return (f"{where}'{' '.join(words)[:40]}' is not an option (a line is '-name [value]'; '#' "
+                    "starts a comment) (-options_file)")
+        if len(words) > 2:
+            return _extra_value_error(words[0], words[1:], where)
+        if words[0] == "-options_file" and len(words) == 2 and os.path.abspath(words[1]) not in seen:
+            nested = bad_options_file(words[1], seen + (os.path.abspath(path),)) \
+                if os.path.isfile(words[1]) else f"{where}options file '{words[1]}' does not exist"
+            if nested:
+                return nested
     return None
 
 
@@ -92,12 +159,15 @@ def main(argv=None) -> int:
         return 0
     if scene is None:
         return _fail(f"no scene given\n{USAGE}\n(python -m petthm -help lists the scenes)", rank)
+    bad = check_arguments(rest)
+    if bad:
+        return _fail(bad, rank)
     for i, a in enumerate(rest):
         if a == "-options_file":
             if i + 1 >= len(rest) or not os.path.isfile(rest[i + 1]):
                 name = rest[i + 1] if i + 1 < len(rest) else ""
                 return _fail(f"options file '{name}' does not exist (-options_file)", rank)
-            bad = _bad_options_line(rest[i + 1])
+            bad = bad_options_file(rest[i + 1])
             if bad:
                 return _fail(bad, rank)
     isolate_singleton()
@@ -108,7 +178,7 @@ def main(argv=None) -> int:
     except Exception as e:           # petsc4py.PETSc.Error (the module may not be there to name it)
         return _fail(f"PETSc could not start with these options (error {e})", rank)
     from .app import run_scene
-    from .errors import InputError
+    from .errors import InputError, WriteFailure
     from .scenes import load
     load(scene)
     from petsc4py import PETSc
@@ -116,6 +186,9 @@ def main(argv=None) -> int:
         summary = run_scene(scene)
     except InputError as e:          # raised on every rank alike
         return _fail(str(e), PETSc.COMM_WORLD.rank)
+    except WriteFailure as e:        # raised on every rank alike: the run could not write its files
+        _fail(str(e), PETSc.COMM_WORLD.rank)
+        return 1
     except Exception:                # a rank-local failure must not leave the others waiting
         import traceback
         traceback.print_exc()
@@ -123,7 +196,7 @@ def main(argv=None) -> int:
         if PETSc.COMM_WORLD.size > 1:
             PETSc.COMM_WORLD.tompi4py().Abort(1)
         raise
-    return {"completed": 0, "interrupted": 3}.get(summary["status"], 1)
+    return summary.get("exit_code", 1)
 
 
 if __name__ == "__main__":

@@ -57,8 +57,11 @@ def increasing_root(f, lo, hi, iterations: int = 80) -> np.ndarray:
 def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T0, Ti):
     """Lauwerier (1955) fracture temperature (verification.md section 1):
     T0 + (Ti - T0) erfc(lambda x / (rho_f c_f q sqrt(kappa (t - t_d)))) U(t - t_d),
-    t_d = a x / q, kappa = lambda / (rho C); q per metre of fracture height."""
+    t_d = a x / q, kappa = lambda / (rho C); q per metre of fracture height.
+    q = 0 (a shut-in): nothing enters, the state at rest T0 everywhere."""
     x = np.asarray(x, dtype=float)
+    if q == 0:
+        return np.full(np.broadcast_shapes(x.shape, np.shape(t)), T0, dtype=float)
     kappa = conductivity / rho_c
     td = aperture * x / q
     tt = np.maximum(t - td, 1e-300)
@@ -84,8 +87,9 @@ def leakoff_outlet_temperature(x, t, *, q0, m, L, fluid_rho_c, rock_rho_c, rock_
 
     Laplace domain: r(s) = [P - sqrt(P^2 + 4 lambda C_m s)] / (2 lambda), P = rho_f c_f v_L,
     theta_f = (Tinj - T0)/s (1 - m x/L)^(-lambda r / (rho_f c_f v_L)).
-    Without matrix advection P = 0 (then the closed form with x_eff holds)."""
-    if t <= 0:
+    Without matrix advection P = 0 (then the closed form with x_eff holds).
+    q0 = 0 (a shut-in): nothing enters, the state at rest T0."""
+    if t <= 0 or q0 == 0:
         return T0
     vL = m * q0 / (2 * L)
     P = fluid_rho_c * vL if advection else 0.0

@@ -21,17 +21,18 @@ from petsc4py import PETSc
 from . import __version__, compat, params as P
 from .constraints import boundary_entries
 from . import checkpoint
-from .errors import InputError, petsc_option_errors
+from .errors import InputError, WriteFailure, petsc_option_errors
 from .fields import Discretisation
 from .mesh import Mesh, distribute, label_boundaries, read_plex
 from .model import Domain
 from .monitors import contact_node_fields, hit
-from .output import FieldWriter, History, write_summary
+from .output import FieldWriter, History, on_root, write_summary
 from .problem import Problem
+from .rundir import RunFolder, with_temporary
 from .scenes.base import REGISTRY
 from .recipes import solver_defaults_by_size
-from .solver import (SOLVER_DEFAULTS, StepControl, TimeStepper, error_control_defaults, failure_message,
-                     propose_defaults, serial_plane_direct)
+from .solver import (PROPOSED, SOLVER_DEFAULTS, StepControl, TimeStepper, error_control_defaults,
+                     failure_message, propose_defaults, serial_plane_direct)
 
 #: options PETSc reads only at finalize or start-up; never "unused"
 _LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
@@ -78,7 +79,9 @@ def make_scene(name: str):
     cls = REGISTRY[name]
     run = P.read(P.RunParams)
     P.check_unknown_thm_options((P.RunParams,) + tuple(cls.parameters))
-    return cls.read(run)
+    scene = cls.read(run)
+    scene.check_inputs()
+    return scene
 
 
 #: the PETSc and petthm events whose count and time summary.json reports
@@ -133,6 +136,17 @@ def options_in_effect() -> dict[str, str]:
     return {"-" + k: v for k, v in sorted(PETSc.Options().getAll().items())}
 
 
+def users_options() -> dict[str, str]:
+    """The PETSc options the user gave (the database less petthm's proposals)."""
+    return {k: v for k, v in PETSc.Options().getAll().items() if k not in PROPOSED}
+
+
+def end_time(scene) -> float:
+    """The run's end time: -ts_max_time if given, else the scene's (-thm_final_time or its default)."""
+    opts = PETSc.Options()
+    return opts.getReal("ts_max_time") if opts.hasName("ts_max_time") else scene.final_time
+
+
 class Run:
     """One simulation of a scene (collective on PETSc.COMM_WORLD)."""
 
@@ -141,24 +155,117 @@ class Run:
         self.comm = PETSc.COMM_WORLD
         self.mpi = self.comm.tompi4py()
         run = scene.run
+        self.saved: dict | None = None            # the metadata of the checkpoint a restart continues
         if run.restart:
-            if run.output_dir and os.path.abspath(run.output_dir) != os.path.abspath(run.restart):
-                raise InputError(f"options -thm_restart = {run.restart} and -thm_output_dir = "
-                                 f"{run.output_dir}: a restart goes on in the folder of the run it "
-                                 "continues (give -thm_restart alone)")
-            if not os.path.isdir(run.restart):
-                raise InputError(f"option -thm_restart = {run.restart}: no such folder")
-            checkpoint.check(run.restart, scene.name)
+            self._check_restart_folder()
         self.outdir = scene.output_dir
+        self.folder = RunFolder(self.outdir, self.comm)
+        self._folder_open = False
+        self._claimed: list[str] = []             # the files this run added to the folder's manifest
         self.stage_wall = {}
         self.t_start = time.perf_counter()
         self._last_checkpoint = self.t_start
         self.mesh_path = run.mesh_file
+        self.mesh_digest: str | None = None
         written = os.path.join(run.restart, "mesh.msh") if run.restart else ""
         if not self.mesh_path and written and os.path.isfile(written):
             self.mesh_path = written                  # the very mesh of the run a restart continues
         self.problem: Problem | None = None
+        self.monitor = None                           # the scene's Monitor (``setup``)
         PETSc.Log.begin()                   # event counts and times for summary.json's solver_costs
+
+    # -- the output folder and what a restart continues -------------------------------------
+    def _check_restart_folder(self) -> None:
+        run = self.scene.run
+        if run.output_dir and os.path.abspath(run.output_dir) != os.path.abspath(run.restart):
+            raise InputError(f"options -thm_restart = {run.restart} and -thm_output_dir = "
+                             f"{run.output_dir}: a restart goes on in the folder of the run it "
+                             "continues (give -thm_restart alone)")
+        if run.overwrite:
+            raise InputError(f"options -thm_restart = {run.restart} and -thm_overwrite: a restart "
+                             "continues the run in its folder, -thm_overwrite replaces it (give one of them)")
+        if not os.path.isdir(run.restart):
+            raise InputError(f"option -thm_restart = {run.restart}: no such folder")
+        self.saved = checkpoint.check(run.restart, self.scene.name)
+
+    def open_folder(self) -> None:
+        """Lock the output folder and check what it holds (``rundir``); a
+        restart then checks that its options keep the problem of the
+        checkpoint (collective, once)."""
+        if self._folder_open:
+            return
+        run = self.scene.run
+        self.folder.open(continuing=bool(run.restart), overwrite=run.overwrite)
+        self._folder_open = True
+        for note in self.folder.notes:
+            _say(self.comm, note)
+        if run.restart:
+            self._check_options_kept()
+
+    def claim(self, names) -> None:
+        """Record files in the folder's manifest before they are written."""
+        self.folder.claim(names)
+        self._claimed += [n for n in names if n not in self._claimed]
+
+    def remove_own_output(self) -> None:
+        """After an input error: remove the files this run wrote (a new run's
+        only: a restart's folder holds the run it continues), so that the
+        corrected command can start in the same folder (collective)."""
+        if self.scene.run.restart or not self._folder_open:
+            return
+        if self.comm.rank == 0:
+            for name in self._claimed:
+                path = os.path.join(self.outdir, name)
+                if os.path.isfile(path):
+                    os.remove(path)
+        self.comm.barrier()
+
+    def _check_options_kept(self) -> None:
+        """A restart continues the same problem: the physics, mesh and
+        discretisation options of the checkpoint's record must not change."""
+        import json
+        raw = checkpoint.read_record(self.outdir, "options")
+        if raw is None:
+            _say(self.comm, f"petthm: note: {self.outdir}/{checkpoint.FILE} records no options (an older "
+                 "petthm): the restart's options are not checked against the run it continues")
+            return
+        saved = json.loads(raw.decode())
+        changes = checkpoint.option_changes(saved, self.option_record())
+        if changes:
+            raise InputError(f"option -thm_restart = {self.outdir}: a restart continues the same problem, "
+                             f"but {'this option differs' if len(changes) == 1 else 'these options differ'} "
+                             f"from the checkpoint's: {'; '.join(changes)} (start a new run for "
+                             "that: another -thm_output_dir, or -thm_overwrite)")
+
+    def option_record(self) -> dict:
+        """Every option in effect, with its kind (``params.option_record``), as JSON reads it back."""
+        import json
+        record = P.option_record((self.scene.run, self.scene.p), users_options())
+        return json.loads(json.dumps(record, default=str))
+
+    def _check_mesh_kept(self, path: str) -> None:
+        """A restart reads the mesh file the checkpoint's run read (its SHA-256)."""
+        saved = (self.saved or {}).get("mesh_sha256")
+        if saved and self.mesh_digest != saved:
+            raise InputError(f"option -thm_restart = {self.outdir}: the mesh file '{path}' is not the one "
+                             "the checkpoint's run read (its contents changed): restore that mesh, or "
+                             "start a new run")
+
+    def already_at_end(self) -> dict | None:
+        """A restart of a run that has reached the end time: a summary that
+        says so (the folder is left as it is); past it: an ``InputError``."""
+        t_saved, t_end = float(self.saved["time"]), end_time(self.scene)
+        if t_saved > t_end * (1 + 1e-12):
+            raise InputError(f"option -thm_restart = {self.outdir}: the run is at t = {t_saved:.6g} s, past "
+                             f"the end time {t_end:.6g} s (-thm_final_time, -ts_max_time); give a later "
+                             "end time to continue it")
+        if t_saved < t_end * (1 - 1e-12):
+            return None
+        message = (f"the run in {self.outdir} has reached its end time t = {t_end:.6g} s: nothing to "
+                   "continue (give a later end time, -thm_final_time, to run on); its output is unchanged")
+        _say(self.comm, message)
+        return {"scene": self.scene.name, "status": "completed", "exit_code": 0, "final_time": t_saved,
+                "message": message}
 
     # -- phases ----------------------------------------------------------------
     def _stage(self, name):
@@ -173,33 +280,70 @@ class Run:
     def build_mesh(self) -> Mesh:
         scene, run = self.scene, self.scene.run
         st, t0 = self._stage("mesh")
-        self._on_rank0(lambda: os.makedirs(self.outdir, exist_ok=True), OSError,
-                       lambda e: f"option -thm_output_dir = {self.outdir}: the folder cannot be created "
-                                 f"({e.strerror or e})")
+        self.open_folder()
         path = self.mesh_path
         if not path:
             path = os.path.join(self.outdir, "mesh.msh")
+            self.claim(["mesh.msh"])
             size = run.mesh_size or scene.time.mesh_size
             from .meshing import set_cell_limit
 
             def generate():
                 set_cell_limit(run.max_cells)
                 scene.generate_mesh(path, size)
-            self._on_rank0(generate, InputError, str)
+            self._on_rank0(generate, (InputError, OSError),
+                           lambda e: str(e) if isinstance(e, InputError) else
+                           f"cannot write {path}: {e.strerror or e}")
+        self.mesh_digest = self._digest(path)
+        self._check_mesh_kept(path)
         with petsc_option_errors(f"the mesh file '{path}'"):
             dm = read_plex(path, self.comm)
         want, option = scene.mesh_dimension()
         if want and dm.getDimension() != want:
             raise InputError(f"mesh '{path}' is {dm.getDimension()}D, but scene {scene.name} is {want}D"
                              + (f" (option -{option} = {want})" if option else ""))
+        scene.check_against_domain(*self._bounding_box(dm))
         with self._user_mesh_fits(dm.getDimension()):
             label_boundaries(dm, scene.boundaries())
         from .fracture import split_fractures
         dm, _ = split_fractures(dm)
-        mesh = Mesh(distribute(dm))
+        dm = distribute(dm)
+        self._check_every_rank_has_cells(dm)
+        mesh = Mesh(dm)
         self._pop("mesh", st, t0)
         self.mesh_path = path
         return mesh
+
+    def _digest(self, path: str) -> str | None:
+        """The SHA-256 of the mesh file (rank 0 reads it; None if it cannot)."""
+        digest = None
+        if self.comm.rank == 0 and os.path.isfile(path):
+            try:
+                digest = checkpoint.file_digest(path)
+            except OSError:
+                pass
+        return self.mpi.bcast(digest, root=0)
+
+    def _bounding_box(self, dm):
+        """The (lower, upper) corners of the mesh's coordinates (collective)."""
+        import numpy as np
+        from mpi4py import MPI
+        cdim = dm.getCoordinateDim()
+        x = dm.getCoordinatesLocal().getArray(readonly=True).reshape(-1, cdim)
+        lo = x.min(axis=0) if len(x) else np.full(cdim, np.inf)
+        hi = x.max(axis=0) if len(x) else np.full(cdim, -np.inf)
+        lower, upper = np.empty(cdim), np.empty(cdim)
+        self.mpi.Allreduce(lo, lower, op=MPI.MIN)
+        self.mpi.Allreduce(hi, upper, op=MPI.MAX)
+        return lower, upper
+
+    def _check_every_rank_has_cells(self, dm) -> None:
+        start, end = dm.getHeightStratum(0)
+        counts = self.mpi.allgather(end - start)
+        if min(counts) == 0:
+            raise InputError(f"the mesh's {sum(counts)} cells cannot feed {len(counts)} ranks (rank "
+                             f"{counts.index(0)} has none): run on fewer ranks, or refine the mesh "
+                             "(-thm_mesh_size, -dm_refine)")
 
     @contextlib.contextmanager
     def _user_mesh_fits(self, dim: int):
@@ -218,16 +362,17 @@ class Run:
 
     def _on_rank0(self, action, errors, message) -> None:
         """Run ``action`` on rank 0; an exception of type ``errors`` becomes
-        an ``InputError`` (``message(exception)``) on every rank alike."""
+        an ``InputError`` (``message(exception)``) on every rank alike, an
+        ``OSError`` a ``WriteFailure``."""
         error = None
         if self.comm.rank == 0:
             try:
                 action()
             except errors as e:
-                error = message(e)
+                error = (isinstance(e, OSError), message(e))
         error = self.mpi.bcast(error, root=0)
         if error:
-            raise InputError(error)
+            raise (WriteFailure if error[0] else InputError)(error[1])
 
     def _check_fractures(self, mesh: Mesh, model) -> None:
         wants = any(f.region is Domain.FRACTURE for f in model.fields)
@@ -277,6 +422,8 @@ class Run:
                               pc_reuse=run.pc_reuse, pc_reuse_max_krylov=run.pc_reuse_max_krylov,
                               predictor=run.predictor,
                               courant=run.dt_courant)
+        if run.dt_control == "schedule":
+            control.check_reachable(end_time(scene), "thm_dt_growth" if run.dt_growth else "")
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
         scene_defaults = dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm),
                               **(error_control_defaults(control) if run.dt_control == "error" else {}))
@@ -286,157 +433,191 @@ class Run:
                                                  run.direct_max_unknowns, scene.block_recipe(snes_type)))
         self._pop("setup", st, t0)
         self.problem = problem
+        self.monitor = setup.monitor
         return disc, problem, control, rs, setup.monitor
 
     def execute(self) -> dict:
-        scene, run = self.scene, self.scene.run
-        comm = self.comm
+        if self.scene.run.restart:
+            self.open_folder()
+            done = self.already_at_end()
+            if done is not None:
+                return done
         mesh = self.build_mesh()
         disc, problem, control, rscales, scene_monitor = self.setup(mesh)
-        sizes = disc.global_sizes()
-        _say(comm, f"petthm {__version__} | scene {scene.name} | {comm.size} rank(s) | "
-             f"{mesh.global_cell_count()} cells | P{run.fe_degree} | dofs "
-             + ", ".join(f"{k}={v}" for k, v in sizes.items()))
-        _say(comm, "scales: " + ", ".join(
-            f"{k}: x = {problem.scales[k].offset:g} + {problem.scales[k].scale:g} x_hat, "
-            f"residual / {rscales[k]:.3e}" for k in sizes))
-
+        self._print_start(mesh, disc, problem, rscales)
         st, t0 = self._stage("output")
-        groups = {}                        # one writer per (region, degree): fields, fields_p1, fracture
-        for f in disc.fields:
-            groups.setdefault((f.region, f.degree), []).append(f)
-        top = {r: max(d for rr, d in groups if rr == r) for r, _ in groups}
-        resume = self._restore(problem) if run.restart else None
-        t_resume = resume["time"] if resume else None
-        writers = [(FieldWriter(disc, self.outdir, d, ("fields" if r is Domain.MATRIX else "fracture")
-                                + ("" if d == top[r] else f"_p{d}"), r, resume_at=t_resume), fields)
-                   for (r, d), fields in groups.items()]
-        columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(scene.history_columns)
-        history = History(os.path.join(self.outdir, "history.csv"), columns, comm.rank, append=bool(resume))
-        stop = checkpoint.StopRequest()
+        resume = self._restore(problem) if self.scene.run.restart else None
+        writers, history = self._start_output(disc, problem, scene_monitor, resume)
         self._pop("output", st, t0)
-        interval = run.output_interval or scene.time.output_interval
-        stepper = None
-        state = {"its": (0, 0), "wall": time.perf_counter(), "last_t": 0.0, "rows": 0, "step_walls": []}
-
-        def write_fields(t):
-            s, t1 = self._stage("output")
-            for w, fields in writers:
-                out = {f.name: self._si_out(problem, f.name, t) for f in fields}
-                if any(f.name == "lam" for f in fields):          # opening, aperture, slip, ...
-                    out.update({k: v for k, v in contact_node_fields(problem, t=t).items()
-                                if k not in ("weight", "slipping_area")})
-                w.write(t, out)
-            self._pop("output", s, t1)
-
-        def monitor(step, t, X):
-            if state["rows"] and t == state["last_t"]:    # TS's last call after a failed step: no new state
-                return
-            state["rows"] += 1
-            snes_its, ksp_its = stepper.iterations() if stepper else (0, 0)
-            dn, dk = snes_its - state["its"][0], ksp_its - state["its"][1]
-            state["its"] = (snes_its, ksp_its)
-            dt = t - state["last_t"]
-            state["last_t"] = t
-            wall = time.perf_counter() - self.t_start
-            row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk, "wall": wall}
-            row.update(scene_monitor(problem, t, X))
-            if resume and t == t_resume:                  # the state the restart starts from is written
-                return
-            history.write(row)
-            if step == 1:
-                check_unused_petsc_options()
-            if step % interval == 0 or t >= control.final_time * (1 - 1e-12) or hit(t, control.hit_times):
-                write_fields(t)                           # and at the times the scene lands on
-            if step > 0 and self._checkpoint_due(step):
-                self._checkpoint(stepper)
-            reason = scene_monitor.stop_reason()
-            if reason:
-                stepper.fail(f"{reason} (t = {t:.6g} s, step {step})")
-                return
-            received = stop.agreed(comm)
-            if received:
-                self._checkpoint(stepper)
-                stepper.request_stop(f"stopped by {received} at t = {t:.6g} s after step {step}; "
-                                     f"continue with -thm_restart {self.outdir}")
-            now = time.perf_counter()
-            state["step_walls"] = (state["step_walls"] + [now - state["wall"]])[-5:]
-            state["wall"] = now
-            if not run.quiet and step > 0:
-                frac = t / control.final_time
-                eta = control.steps_left(t, dt) * sum(state["step_walls"]) / len(state["step_walls"])
-                _say(comm, f"step {step:5d}  t = {t:.4e} s  dt = {dt:.3e} s  newton {dn:2d}  "
-                     f"krylov {dk:4d}  {100 * frac:5.1f} %  left ~{eta:7.1f} s")
-
+        steps = _StepReport(self, problem, control, scene_monitor, writers, history, resume)
         with petsc_option_errors("the solver options (-ts_*, -snes_*, -ksp_*, -pc_*)"):
-            stepper = TimeStepper(problem, control, monitor)
+            stepper = TimeStepper(problem, control, steps)
+        steps.stepper = stepper
         if resume:
             stepper.resume(resume["time"], resume["dt"], resume["step"],
                            {k: resume[k] for k in stepper.schedule_state() if k in resume})
+        reason, write_failure = self._solve(stepper, steps)
+        return self._finish(mesh, disc, stepper, reason, write_failure, steps, history, control)
+
+    def _print_start(self, mesh, disc, problem, rscales) -> None:
+        sizes = disc.global_sizes()
+        _say(self.comm, f"petthm {__version__} | scene {self.scene.name} | {self.comm.size} rank(s) | "
+             f"{mesh.global_cell_count()} cells | P{self.scene.run.fe_degree} | dofs "
+             + ", ".join(f"{k}={v}" for k, v in sizes.items()))
+        _say(self.comm, "scales: " + ", ".join(
+            f"{k}: x = {problem.scales[k].offset:g} + {problem.scales[k].scale:g} x_hat, "
+            f"residual / {rscales[k]:.3e}" for k in sizes))
+
+    def _start_output(self, disc, problem, scene_monitor, resume):
+        """The field writers (one per region and degree: fields, fields_p1,
+        fracture) and history.csv; every file the run writes is in the
+        folder's manifest before it is created."""
+        groups = {}
+        for f in disc.fields:
+            groups.setdefault((f.region, f.degree), []).append(f)
+        top = {r: max(d for rr, d in groups if rr == r) for r, _ in groups}
+        stems = {(r, d): ("fields" if r is Domain.MATRIX else "fracture") + ("" if d == top[r] else f"_p{d}")
+                 for r, d in groups}
+        self.claim(with_temporary(["history.csv", "summary.json", checkpoint.FILE]
+                                  + [s + e for s in stems.values() for e in (".h5", ".xdmf")]
+                                  + list(scene_monitor.files)))
+        t_resume = resume["time"] if resume else None
+        writers = [(FieldWriter(disc, self.outdir, d, stems[r, d], r, resume_at=t_resume), fields)
+                   for (r, d), fields in groups.items()]
+        columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(self.scene.history_columns)
+        history = History(os.path.join(self.outdir, "history.csv"), columns, self.comm, append=bool(resume))
+        return writers, history
+
+    def _solve(self, stepper, steps) -> tuple[int, WriteFailure | None]:
+        """Run the time stepper; (TS reason, the write failure that stopped it or None)."""
         st, t0 = self._stage("solve")
-        state["wall"] = time.perf_counter()
-        stop.install()
+        steps.wall = time.perf_counter()
+        steps.stop.install()
+        failure = None
         try:
             reason = stepper.solve()
         except InputError:             # raised on every rank alike in a Python PC's set-up (-vi_groups)
             stepper.destroy()          # now: a Python PC left mid-set-up crashed PETSc's exit
             raise
+        except WriteFailure as e:      # raised on every rank alike by the step's output
+            failure, reason = e, -1
         except PETSc.Error as e:       # PETSc >= 3.20 hands it back as error 101, the InputError its cause
             if not isinstance(e.__cause__, InputError):
                 raise
             stepper.destroy()
             raise e.__cause__ from None
         finally:
-            stop.restore()
+            steps.stop.restore()
         self._pop("solve", st, t0)
+        return reason, failure
+
+    def _status(self, stepper, reason: int, t_final: float, control) -> tuple[str, int, str | None]:
+        """(status, exit code, message) of the run (physics.md section 12)."""
+        if stepper.stopped:
+            return stepper.stop_status, 3, stepper.stopped
+        if reason <= 0 or stepper.failure is not None:
+            return "failed", 1, stepper.failure or failure_message(stepper.ts)
+        if reason == PETSc.TS.ConvergedReason.CONVERGED_ITS and t_final < control.final_time * (1 - 1e-12):
+            return "stopped", 4, (f"stopped by -ts_max_steps {stepper.ts.getStepNumber()} at t = "
+                                  f"{t_final:.6g} s, before the end time {control.final_time:.6g} s; "
+                                  f"continue with -thm_restart {self.outdir}")
+        return "completed", 0, None
+
+    def _finish(self, mesh, disc, stepper, reason, write_failure, steps, history, control) -> dict:
+        scene, run, comm = self.scene, self.scene.run, self.comm
         drop_unused_proposals()
         t_final = stepper.ts.getTime()
-        failed = reason <= 0 or stepper.failure is not None
-        status = "interrupted" if stepper.stopped else "failed" if failed else "completed"
+        status, code, message = self._status(stepper, reason, t_final, control)
+        if write_failure is not None:
+            status, code = "failed", 1
+            message = (f"{write_failure}; the last checkpoint ({self._checkpoint_time_text()}) is intact: "
+                       f"free space, then continue with -thm_restart {self.outdir}")
+        its = steps.whole_run_iterations()
         summary = {
-            "scene": scene.name, "status": status,
+            "scene": scene.name, "status": status, "exit_code": code,
             "reason": str(reason) + ("" if reason > 0 else " (TS diverged; last accepted state saved)"),
             "petthm_version": __version__, "petsc_version": compat.version_string(),
             "petsc4py_version": __import__("petsc4py").__version__,
             "ranks": comm.size, "cells": mesh.global_cell_count(), "fe_degree": run.fe_degree,
-            "fields": [f.name for f in disc.fields], "dofs": sizes,
-            "steps": stepper.ts.getStepNumber(), "rejected_steps": stepper.rejected,
-            "snes_iterations": stepper.iterations()[0], "ksp_iterations": stepper.iterations()[1],
-            "final_time": t_final,
-            "message": stepper.stopped or stepper.failure or
-            (None if reason > 0 else failure_message(stepper.ts)),
+            "fields": [f.name for f in disc.fields], "dofs": disc.global_sizes(),
+            "steps": stepper.ts.getStepNumber(), "rejected_steps": steps.rejected_before + stepper.rejected,
+            "snes_iterations": its[0], "ksp_iterations": its[1],
+            "final_time": t_final, "message": message,
         }
+        if steps.resumed_from is not None:
+            summary["restarted_from"] = steps.resumed_from
         st, t0 = self._stage("output")
-        summary.update(scene_monitor.report(problem, t_final))
-        summary["provenance"] = {"git_commit": git_commit(), "mesh": self.mesh_path,
-                                 "parameters": P.values_in_effect(run) | P.values_in_effect(scene.p),
-                                 "options": options_in_effect()}
-        if status == "failed":
-            write_fields(t_final)
-        if not stepper.stopped:
-            self._checkpoint(stepper)                     # the last accepted state
+        try:
+            summary.update(self.monitor.report(self.problem, t_final))
+            summary["provenance"] = {"git_commit": git_commit(), "mesh": self.mesh_path,
+                                     "mesh_sha256": self.mesh_digest,
+                                     "parameters": P.values_in_effect(run) | P.values_in_effect(scene.p),
+                                     "options": options_in_effect()}
+            if write_failure is None:
+                if status == "failed":
+                    steps.write_fields(t_final)
+                if not stepper.stopped:
+                    self._checkpoint(stepper, steps)          # the last accepted state
+        except WriteFailure as e:
+            write_failure = write_failure or e
+            summary.update(status="failed", exit_code=1, message=f"{e}; the last checkpoint "
+                           f"({self._checkpoint_time_text()}) is intact: free space, then continue with "
+                           f"-thm_restart {self.outdir}")
         history.close()
         stepper.destroy()
         self._pop("output", st, t0)
         summary["wall_time"] = dict(self.stage_wall, total=time.perf_counter() - self.t_start)
+        summary["wall_time_whole_run"] = steps.wall_before + summary["wall_time"]["total"]
         summary["solver_costs"] = solver_costs()
         summary["peak_memory_mb"] = peak_memory_mb()
         summary["pc_rebuilds_forced"] = stepper.reuse.rebuilds if stepper.reuse is not None else None
-        write_summary(os.path.join(self.outdir, "summary.json"), summary, comm.rank)
-        if summary["message"]:
+        try:
+            write_summary(os.path.join(self.outdir, "summary.json"), summary, comm)
+        except WriteFailure as e:
+            _say(comm, f"petthm: {e} (summary.json not written)")
+        self._say_end(summary, write_failure is not None)
+        return summary
+
+    def _say_end(self, summary: dict, write_failure: bool) -> None:
+        """The last lines: why the run stopped (a write failure as the one
+        line ``petthm: error:`` on stderr), the errors against the scene's
+        reference, the status."""
+        import sys
+        comm = self.comm
+        if write_failure and comm.rank == 0:
+            print(f"petthm: error: {summary['message']}", file=sys.stderr, flush=True)
+        elif summary["message"]:
             _say(comm, f"petthm: the run stopped: {summary['message']}")
-        _say(comm, f"{status}: t = {t_final:.4e} s in {summary['steps']} steps "
+        errors = {k: v for k, v in (summary.get("error") or {}).items() if v is not None}
+        if errors:
+            _say(comm, "errors against the reference: " + ", ".join(
+                f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in errors.items()))
+        _say(comm, f"{summary['status']}: t = {summary['final_time']:.4e} s in {summary['steps']} steps "
              f"({summary['rejected_steps']} rejected), {summary['wall_time']['total']:.2f} s, "
              f"peak memory {summary['peak_memory_mb']['max_rank']:.0f} MB per rank; output in {self.outdir}")
-        return summary
+
+    def _checkpoint_time_text(self) -> str:
+        import h5py
+        text = "none written"
+        if self.comm.rank == 0:
+            try:
+                with h5py.File(os.path.join(self.outdir, checkpoint.FILE), "r") as h5:
+                    text = f"t = {float(h5.attrs['time']):.6g} s"
+            except (OSError, KeyError):
+                pass
+        return self.mpi.bcast(text, root=0)
 
     def _restore(self, problem) -> dict:
         """Load the checkpoint of the run a restart continues (the state
         after problem set-up: the same scales, proposals and initial
-        conditions as the original run) and drop its history rows after it."""
+        conditions as the original run), the monitors' state, and drop the
+        history rows after it."""
         meta = checkpoint.read(self.outdir, problem.X, problem.dm, self.scene.name)
-        if self.comm.rank == 0:
-            checkpoint.truncate_history(os.path.join(self.outdir, "history.csv"), meta["time"])
+        state = checkpoint.read_record(self.outdir, "monitor")
+        if state is not None:
+            self.monitor.restore(checkpoint.unpack_state(state, os.path.join(self.outdir, checkpoint.FILE)))
+        history = os.path.join(self.outdir, "history.csv")
+        on_root(self.comm, lambda: checkpoint.truncate_history(history, meta["time"]), history)
         _say(self.comm, f"restart from {os.path.join(self.outdir, checkpoint.FILE)}: "
              f"t = {meta['time']:.6g} s, step {meta['step']}")
         return meta
@@ -447,16 +628,26 @@ class Run:
         run = self.scene.run
         if run.checkpoint_interval and step % run.checkpoint_interval == 0:
             return True
-        return bool(run.checkpoint_wall) and self.comm.tompi4py().bcast(
+        return bool(run.checkpoint_wall) and self.mpi.bcast(
             time.perf_counter() - self._last_checkpoint >= run.checkpoint_wall, root=0)
 
-    def _checkpoint(self, stepper) -> None:
+    def past_wall_limit(self) -> bool:
+        """Whether -thm_max_wall seconds have passed since the start (rank 0's clock decides)."""
+        limit = self.scene.run.max_wall
+        return bool(limit) and self.mpi.bcast(time.perf_counter() - self.t_start >= limit, root=0)
+
+    def _checkpoint(self, stepper, steps) -> None:
+        import json
         self._last_checkpoint = time.perf_counter()
         ts = stepper.ts
-        checkpoint.write(self.outdir, self.problem.X, self.problem.dm, {
-            "scene": self.scene.name, "time": ts.getTime(), "dt": ts.getTimeStep(),
-            "step": ts.getStepNumber(), "rejected": ts.getStepRejections(),
-            **stepper.schedule_state()})
+        meta = {"scene": self.scene.name, "time": ts.getTime(), "dt": ts.getTimeStep(),
+                "step": ts.getStepNumber(), "rejected": steps.rejected_before + ts.getStepRejections(),
+                "wall": steps.wall_before + time.perf_counter() - self.t_start,
+                **({"mesh_sha256": self.mesh_digest} if self.mesh_digest else {}),
+                **stepper.schedule_state()}
+        records = {"options": json.dumps(self.option_record()).encode(),
+                   "monitor": checkpoint.pack_state(self.monitor.carried_state())}
+        checkpoint.write(self.outdir, self.problem.X, self.problem.dm, meta, records)
 
     @staticmethod
     def _si_out(problem, name, t):
@@ -464,6 +655,118 @@ class Run:
         return v - P.CELSIUS if name.startswith("T") else v
 
 
+class _StepReport:
+    """What happens after every accepted step (and for the initial state):
+    the history row, field output, checkpoints, and the checks that stop a
+    run (the scene's verdict, a signal, -thm_max_wall), then the progress line."""
+
+    def __init__(self, run: Run, problem, control, scene_monitor, writers, history, resume):
+        self.run, self.problem, self.control = run, problem, control
+        self.scene_monitor, self.writers, self.history = scene_monitor, writers, history
+        self.resume = resume
+        self.t_resume = resume["time"] if resume else None
+        self.resumed_from = {"time": resume["time"], "step": int(resume["step"])} if resume else None
+        self.rejected_before = int(resume.get("rejected", 0)) if resume else 0
+        self.wall_before = float(resume.get("wall", 0.0)) if resume else 0.0
+        self.stepper = None
+        self.stop = checkpoint.StopRequest()
+        self.its = (0, 0)
+        self.wall = time.perf_counter()
+        self.last_t = 0.0
+        self.rows = 0
+        self.step_walls: list[float] = []
+        self.interval = run.scene.run.output_interval or run.scene.time.output_interval
+
+    def write_fields(self, t: float) -> None:
+        run, problem = self.run, self.problem
+        s, t1 = run._stage("output")
+        for w, fields in self.writers:
+            out = {f.name: run._si_out(problem, f.name, t) for f in fields}
+            if any(f.name == "lam" for f in fields):          # opening, aperture, slip, ...
+                out.update({k: v for k, v in contact_node_fields(problem, t=t).items()
+                            if k not in ("weight", "slipping_area")})
+            w.write(t, out)
+        run._pop("output", s, t1)
+
+    def whole_run_iterations(self) -> tuple[int, int]:
+        """(Newton, Krylov) iterations of the whole run: history.csv's sums
+        (a restart's file holds the rows of the run it continues)."""
+        import csv
+        totals = None
+        if self.run.comm.rank == 0:
+            try:
+                with open(self.history.path, newline="") as f:
+                    rows = list(csv.DictReader(f))
+                totals = tuple(sum(int(float(r[k] or 0)) for r in rows) for k in ("snes_its", "ksp_its"))
+            except (OSError, KeyError, ValueError):
+                totals = None
+        totals = self.run.mpi.bcast(totals, root=0)
+        return totals if totals is not None else self.stepper.iterations()
+
+    def __call__(self, step, t, X):
+        run, stepper, control = self.run, self.stepper, self.control
+        if self.rows and t == self.last_t:    # TS's last call after a failed step: no new state
+            return
+        self.rows += 1
+        snes_its, ksp_its = stepper.iterations() if stepper else (0, 0)
+        dn, dk = snes_its - self.its[0], ksp_its - self.its[1]
+        self.its = (snes_its, ksp_its)
+        dt = t - self.last_t
+        self.last_t = t
+        row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk,
+               "wall": time.perf_counter() - run.t_start + self.wall_before}
+        row.update(self.scene_monitor(self.problem, t, X))
+        if self.resume and t == self.t_resume:            # the state the restart starts from is written
+            return
+        self.history.write(row)
+        if step == 1:
+            check_unused_petsc_options()
+        if step % self.interval == 0 or t >= control.final_time * (1 - 1e-12) or hit(t, control.hit_times):
+            self.write_fields(t)                          # and at the times the scene lands on
+        if step > 0 and run._checkpoint_due(step):
+            run._checkpoint(stepper, self)
+        if self._stopped(step, t):
+            return
+        self._progress(step, t, dt, dn, dk)
+
+    def _stopped(self, step: int, t: float) -> bool:
+        """Stop after this step if the scene says the run cannot go on, a
+        signal came, or -thm_max_wall has passed (the last two with a checkpoint)."""
+        run, stepper = self.run, self.stepper
+        reason = self.scene_monitor.stop_reason()
+        if reason:
+            stepper.fail(f"{reason} (t = {t:.6g} s, step {step})")
+            return True
+        received = self.stop.agreed(run.comm)
+        limit = not received and run.past_wall_limit()
+        if received or limit:
+            run._checkpoint(stepper, self)
+            cause = f"{received}" if received else f"-thm_max_wall {run.scene.run.max_wall:g} s"
+            stepper.request_stop(f"stopped by {cause} at t = {t:.6g} s after step {step}; continue with "
+                                 f"-thm_restart {run.outdir}",
+                                 status="interrupted" if received else "stopped")
+            return True
+        return False
+
+    def _progress(self, step, t, dt, dn, dk) -> None:
+        now = time.perf_counter()
+        self.step_walls = (self.step_walls + [now - self.wall])[-5:]
+        self.wall = now
+        if self.run.scene.run.quiet or step <= 0:
+            return
+        frac = t / self.control.final_time
+        eta = self.control.steps_left(t, dt) * sum(self.step_walls) / len(self.step_walls)
+        _say(self.run.comm, f"step {step:5d}  t = {t:.4e} s  dt = {dt:.3e} s  newton {dn:2d}  "
+             f"krylov {dk:4d}  {100 * frac:5.1f} %  left ~{eta:7.1f} s")
+
+
 def run_scene(name: str) -> dict:
-    scene = make_scene(name)
-    return Run(scene).execute()
+    """Run a scene from the options database; the summary (its ``exit_code``:
+    physics.md section 12).  A run refused for its input removes the files
+    it wrote itself, so that the corrected command can start in the same folder."""
+    run = Run(make_scene(name))
+    try:
+        return run.execute()
+    except InputError:
+        run.remove_own_output()
+        raise

@@ -28,8 +28,8 @@ import signal
 
 import numpy as np
 
-from .errors import InputError
-from .output import history_number, in_turns
+from .errors import InputError, WriteFailure, os_error_text
+from .output import check_space, history_number, in_turns, on_root
 
 FILE = "checkpoint.h5"
 SIGNALS = ("SIGTERM", "SIGINT", "SIGUSR1")
@@ -66,9 +66,13 @@ def _layout(dm):
     return original_points(dm)[keep], offset[keep], ndof[keep], owned[keep]
 
 
-def write(directory: str, X, dm, meta: dict) -> None:
+def write(directory: str, X, dm, meta: dict, records: dict[str, bytes] | None = None) -> None:
     """Write ``checkpoint.h5`` (see the module docstring); ``meta``: time,
-    dt, step, rejected, scene (collective)."""
+    dt, step, rejected, scene, ... (attributes); ``records``: byte strings
+    rank 0 stores as datasets (the options in effect, the monitors' state).
+    The file is written as ``checkpoint.h5.tmp`` and renamed: a run killed
+    or out of disk space while writing keeps the previous checkpoint
+    (collective; a failed write is a ``WriteFailure`` on every rank)."""
     import h5py
     comm = X.getComm().tompi4py()
     path = os.path.join(directory, FILE)
@@ -80,18 +84,41 @@ def write(directory: str, X, dm, meta: dict) -> None:
     idx = _block_indices(offset[owned], ndof[owned])
     part = {"point": key[owned], "ndof": ndof[owned], "value": values[idx].copy()}
     dm.restoreLocalVec(Xl)
+    blobs = {k: np.frombuffer(v, dtype=np.uint8) for k, v in (records or {}).items()}
 
     def write_part(r):
         with h5py.File(tmp, "w" if r == 0 else "a") as h5:
             if r == 0:
                 for k, v in dict(meta, ranks=comm.size, size=X.getSize()).items():
                     h5.attrs[k] = v
+                for k, v in blobs.items():
+                    h5[k] = v
             for name, arr in part.items():
                 h5[f"{name}/{r}"] = arr
-    in_turns(comm, write_part)
-    if comm.rank == 0:
-        os.replace(tmp, path)
-    comm.barrier()
+    try:
+        check_space(comm, tmp, sum(a.nbytes for a in part.values()) + sum(b.nbytes for b in blobs.values()))
+        in_turns(comm, write_part, tmp)
+        on_root(comm, lambda: os.replace(tmp, path), path)
+    except WriteFailure:
+        if comm.rank == 0 and os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def read_record(directory: str, name: str) -> bytes | None:
+    """A byte string ``write`` stored in ``DIR/checkpoint.h5`` (None if it has none)."""
+    import h5py
+    path = os.path.join(directory, FILE)
+    try:
+        with h5py.File(path, "r") as h5:
+            return bytes(h5[name][...].tobytes()) if name in h5 else None
+    except (OSError, KeyError, ValueError, RuntimeError) as e:
+        raise InputError(_damaged(path, e)) from None
+
+
+def _damaged(path: str, error: BaseException) -> str:
+    return (f"{path} is not a readable checkpoint ({os_error_text(error)}): it is truncated or damaged; "
+            "restore it, or start a new run (another -thm_output_dir, or -thm_overwrite)")
 
 
 def _match(saved_point, saved_ndof, key, ndof):
@@ -111,7 +138,7 @@ def _block_indices(offset: np.ndarray, ndof: np.ndarray) -> np.ndarray:
 
 def check(directory: str, scene: str) -> dict:
     """The metadata of ``DIR/checkpoint.h5``, checked before the run is
-    built: the file exists, can be read and is of this scene."""
+    built: the file exists, can be read, is a checkpoint and is of this scene."""
     import h5py
     path = os.path.join(directory, FILE)
     if not os.path.isfile(path):
@@ -120,8 +147,12 @@ def check(directory: str, scene: str) -> dict:
     try:
         with h5py.File(path, "r") as h5:
             meta = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
-    except OSError as e:
-        raise InputError(f"option -thm_restart = {directory}: {FILE} cannot be read ({e})") from None
+            complete = all(name in h5 for name in ("point", "ndof", "value"))
+    except (OSError, KeyError, ValueError, RuntimeError) as e:
+        raise InputError(_damaged(path, e)) from None
+    missing = [k for k in ("scene", "time", "dt", "step", "size") if k not in meta]
+    if missing or not complete:
+        raise InputError(_damaged(path, KeyError(f"it lacks {', '.join(missing) or 'the state'}")))
     if meta.get("scene") != scene:
         raise InputError(f"option -thm_restart = {directory}: the checkpoint is of scene "
                          f"{meta.get('scene')}, not {scene}")
@@ -131,16 +162,19 @@ def check(directory: str, scene: str) -> dict:
 def read(directory: str, X, dm, scene: str) -> dict:
     """Load X from ``DIR/checkpoint.h5`` and return its metadata (collective).
     Values are matched by the serial mesh's point numbers, so any rank count
-    and partition can read them; a missing file, another scene or another
-    problem is an ``InputError``."""
+    and partition can read them; a missing or damaged file, another scene or
+    another problem is an ``InputError``."""
     import h5py
     meta = check(directory, scene)
+    path = os.path.join(directory, FILE)
     try:
-        with h5py.File(os.path.join(directory, FILE), "r") as h5:
+        with h5py.File(path, "r") as h5:
             saved = {name: np.concatenate([h5[name][r][...] for r in sorted(h5[name], key=int)])
                      for name in ("point", "ndof", "value")}
-    except (OSError, KeyError) as e:
-        raise InputError(f"option -thm_restart = {directory}: {FILE} cannot be read ({e})") from None
+    except (OSError, KeyError, ValueError, RuntimeError) as e:
+        raise InputError(_damaged(path, e)) from None
+    if len(saved["value"]) != int(saved["ndof"].sum()) or len(saved["point"]) != len(saved["ndof"]):
+        raise InputError(_damaged(path, ValueError("its state is incomplete")))
     key, offset, ndof, _ = _point_blocks(dm)
     where, found = _match(saved["point"], saved["ndof"], key, ndof)
     missing = int(X.getComm().tompi4py().allreduce(int((~found).sum())))
@@ -156,6 +190,73 @@ def read(directory: str, X, dm, scene: str) -> dict:
     dm.localToGlobal(Xl, X)
     dm.restoreLocalVec(Xl)
     return meta
+
+
+# -- what a restart must keep ------------------------------------------------------------------
+def option_changes(saved: dict, now: dict) -> list[str]:
+    """The options of a kind in ``params.FIXED_ON_RESTART`` whose value
+    differs between the checkpoint's record ``saved`` and this run's ``now``
+    (records of ``params.option_record``), as "-name old -> new (kind)"."""
+    from .params import FIXED_ON_RESTART
+    out = []
+    for name in sorted(set(saved) | set(now)):
+        old, new = saved.get(name), now.get(name)
+        kind = (new or old)["kind"]
+        if kind not in FIXED_ON_RESTART:
+            continue
+        was = "(not set)" if old is None else old["value"]
+        is_ = "(not set)" if new is None else new["value"]
+        if was != is_:
+            out.append(f"{name} {_show(was)} -> {_show(is_)} ({kind})")
+    return out
+
+
+def _show(value) -> str:
+    return ",".join(map(str, value)) if isinstance(value, list) else str(value)
+
+
+def file_digest(path: str) -> str:
+    """The SHA-256 of a file's contents (the mesh a run read)."""
+    import hashlib
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+# -- the monitors' state ------------------------------------------------------------------------
+def pack_state(state: dict) -> bytes:
+    """The monitors' carried state (plain data: numbers, strings, lists,
+    tuples, dicts, numpy arrays, ``Worst``) as bytes for the checkpoint."""
+    import pickle
+    return pickle.dumps(state, protocol=4)
+
+
+def unpack_state(data: bytes, path: str) -> dict:
+    """``pack_state``'s bytes back, admitting plain data only (a checkpoint
+    cannot make the run execute code)."""
+    import io
+    import pickle
+
+    class PlainData(pickle.Unpickler):
+        def find_class(self, module, name):
+            if (module, name) in _PLAIN_CLASSES:
+                return super().find_class(module, name)
+            raise pickle.UnpicklingError(f"{module}.{name} is not plain data")
+    try:
+        return PlainData(io.BytesIO(data)).load()
+    except Exception as e:  # noqa: BLE001 - any damage of the record is the same error for the user
+        raise InputError(_damaged(path, ValueError(f"its monitor record: {e}"))) from None
+
+
+#: the classes a monitor's carried state may hold (``unpack_state``)
+_PLAIN_CLASSES = {("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple"), ("builtins", "set"),
+                  ("builtins", "float"), ("builtins", "int"), ("builtins", "complex"),
+                  ("numpy", "ndarray"), ("numpy", "dtype"), ("numpy.core.multiarray", "_reconstruct"),
+                  ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "_reconstruct"),
+                  ("numpy._core.multiarray", "scalar"), ("petthm.monitors", "Worst"),
+                  ("copyreg", "_reconstructor"), ("builtins", "object")}
 
 
 class StopRequest:
@@ -211,4 +312,5 @@ def truncate_history(path: str, t: float) -> None:
     os.replace(path + ".tmp", path)
 
 
-__all__ = ["write", "read", "StopRequest", "truncate_history", "FILE"]
+__all__ = ["write", "read", "check", "read_record", "option_changes", "file_digest", "pack_state",
+           "unpack_state", "StopRequest", "truncate_history", "FILE"]

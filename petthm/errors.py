@@ -9,6 +9,22 @@ class InputError(Exception):
     """
 
 
+class WriteFailure(Exception):
+    """A file of the run could not be written (no space left, a lost file
+    system): raised on every rank alike; the run ends as failed (exit code
+    1) with this one-line message, and the last checkpoint stays intact."""
+
+
+def os_error_text(error: BaseException) -> str:
+    """The operating system's words for a failed write: the ``strerror`` of
+    an OSError, or the ``error message = '...'`` inside HDF5's long message."""
+    import re
+    if isinstance(error, OSError) and error.strerror:
+        return error.strerror
+    m = re.search(r"error message = '([^']*)'", str(error))
+    return m.group(1) if m else str(error).splitlines()[0] if str(error) else type(error).__name__
+
+
 class petsc_option_errors:
     """Turn a PETSc error raised while PETSc reads its options (an unknown
     ``-pc_type``, a value out of range such as ``-dm_refine -1``) into an

@@ -5,6 +5,43 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import InputError
+
+#: one standard atmosphere (Pa): absolute pressure = gauge pressure + ATMOSPHERE
+ATMOSPHERE = 101_325.0
+#: IAPWS-IF97 region 1 (compressed liquid): 273.15 K <= T <= 623.15 K, p_sat(T) <= p <= 100 MPa
+REGION1_T_MAX_C = 350.0
+REGION1_P_MAX = 100e6
+
+
+def liquid_range(p_abs: float) -> tuple[float, float] | None:
+    """(lowest, highest) temperature in degC of liquid water at the absolute
+    pressure ``p_abs`` (IAPWS-IF97 region 1: above 0 degC, below the
+    saturation temperature T_sat(p) of the ``iapws`` package and at most
+    350 degC, region 1's edge); None where region 1 has no liquid at this
+    pressure (below the triple point's 611.2 Pa, above 100 MPa)."""
+    from iapws.iapws97 import Pc, _TSat_P
+    p_mpa = p_abs * 1e-6
+    if not 611.2128 * 1e-6 <= p_mpa <= REGION1_P_MAX * 1e-6:
+        return None
+    t_sat = _TSat_P(p_mpa) - 273.15 if p_mpa <= Pc else float("inf")
+    return 0.0, min(t_sat, REGION1_T_MAX_C)
+
+
+def check_liquid(option: str, T: float, p_abs: float, where: str) -> None:
+    """An ``InputError`` unless ``T`` (degC, option ``-option``) is liquid
+    water at ``p_abs`` (Pa; ``where`` says where it comes from)."""
+    bounds = liquid_range(p_abs)
+    if bounds is None:
+        raise InputError(f"option -{option} = {T:g} degC: there is no liquid water at {p_abs / 1e6:.6g} MPa "
+                         f"absolute ({where}); IAPWS-IF97 region 1 needs 611.2 Pa to 100 MPa")
+    lo, hi = bounds
+    edge = hi == REGION1_T_MAX_C                     # region 1 holds T = 350 degC; boiling water does not
+    if not (T > lo and (T <= hi if edge else T < hi)):
+        bound = f"T <= {hi:g} degC, the edge of region 1" if edge else f"T < {hi:.4g} degC, boiling"
+        raise InputError(f"option -{option} = {T:g} degC is not liquid water at {p_abs / 1e6:.6g} MPa "
+                         f"absolute ({where}): IAPWS-IF97 region 1 needs {lo:g} degC < T and {bound}")
+
 
 def water_viscosity(T, lib=np):
     """mu(T) of water in Pa s, T in kelvin (physics.md section 8); ``lib``:

@@ -24,7 +24,7 @@ import numpy as np
 
 from .errors import InputError
 from .fluid import Viscosity
-from .params import CELSIUS, param
+from .params import CELSIUS, DISCRETISATION, PHYSICS, param
 
 #: Nusselt number of laminar flow between parallel plates (physics.md section 7)
 NUSSELT = 7.54
@@ -136,60 +136,66 @@ _POS = dict(lo=0.0, lo_open=True)
 
 DECLARED = {
     # rock (physics.md sections 2, 5, 6)
-    "rock_youngs_modulus": param(37.5e9, "Pa", "drained Young's modulus E", **_POS),
-    "rock_poisson_ratio": param(0.25, "-", "drained Poisson ratio nu", lo=0.0, hi=0.4999),
-    "rock_biot_coefficient": param(0.8, "-", "Biot coefficient alpha", lo=0.0, hi=1.0),
-    "rock_porosity": param(0.0, "-", "porosity phi", lo=0.0, hi=1.0),
+    "rock_youngs_modulus": param(37.5e9, "Pa", "drained Young's modulus E", **_POS, kind=PHYSICS),
+    "rock_poisson_ratio": param(0.25, "-", "drained Poisson ratio nu", lo=0.0, hi=0.4999, kind=PHYSICS),
+    "rock_biot_coefficient": param(0.8, "-", "Biot coefficient alpha", lo=0.0, hi=1.0, kind=PHYSICS),
+    "rock_porosity": param(0.0, "-", "porosity phi", lo=0.0, hi=1.0, kind=PHYSICS),
     "rock_permeability": param((1e-14,), "m2", "matrix permeability k_m: one value, or kxx,kyy[,kzz]",
-                               lo=0.0),
-    "rock_density": param(2650.0, "kg/m3", "rock density rho_s", **_POS),
-    "rock_heat_capacity": param(800.0, "J/(kg K)", "rock heat capacity C_s", **_POS),
-    "rock_conductivity": param(2.9, "W/(m K)", "rock thermal conductivity lambda_s", **_POS),
-    "rock_thermal_expansion": param(2.4e-5, "1/K", "rock volumetric thermal expansion beta_s", lo=0.0),
+                               lo=0.0, kind=PHYSICS),
+    "rock_density": param(2650.0, "kg/m3", "rock density rho_s", **_POS, kind=PHYSICS),
+    "rock_heat_capacity": param(800.0, "J/(kg K)", "rock heat capacity C_s", **_POS, kind=PHYSICS),
+    "rock_conductivity": param(2.9, "W/(m K)", "rock thermal conductivity lambda_s", **_POS, kind=PHYSICS),
+    "rock_thermal_expansion": param(2.4e-5, "1/K", "rock volumetric thermal expansion beta_s", lo=0.0,
+                                    kind=PHYSICS),
     # fluid (sections 4-8)
-    "fluid_density": param(1000.0, "kg/m3", "fluid density rho_f", **_POS),
-    "fluid_heat_capacity": param(4200.0, "J/(kg K)", "fluid heat capacity C_f", **_POS),
-    "fluid_conductivity": param(0.6, "W/(m K)", "fluid thermal conductivity lambda_f", lo=0.0),
-    "fluid_thermal_expansion": param(2.07e-4, "1/K", "fluid volumetric thermal expansion beta_f", lo=0.0),
-    "fluid_compressibility": param(4.5e-10, "1/Pa", "fluid compressibility c_f", lo=0.0),
+    "fluid_density": param(1000.0, "kg/m3", "fluid density rho_f", **_POS, kind=PHYSICS),
+    "fluid_heat_capacity": param(4200.0, "J/(kg K)", "fluid heat capacity C_f", **_POS, kind=PHYSICS),
+    "fluid_conductivity": param(0.6, "W/(m K)", "fluid thermal conductivity lambda_f", lo=0.0, kind=PHYSICS),
+    "fluid_thermal_expansion": param(2.07e-4, "1/K", "fluid volumetric thermal expansion beta_f", lo=0.0,
+                                     kind=PHYSICS),
+    "fluid_compressibility": param(4.5e-10, "1/Pa", "fluid compressibility c_f", lo=0.0, kind=PHYSICS),
     "fluid_viscosity": param("1e-3", "Pa s", "viscosity: a number, or 'water' for mu(T)",
-                             parse=parse_viscosity),
+                             parse=parse_viscosity, kind=PHYSICS),
     # fractures (sections 3, 4, 7)
     "fracture_aperture": param(1e-3, "m", "hydraulic aperture a0 (rigid fracture), or a0 at zero "
-                               "contact traction (deformable)", **_POS),
-    "fracture_normal_stiffness": param(1e11, "Pa/m", "normal joint stiffness Kn", **_POS),
-    "fracture_residual_fraction": param(1e-3, "-", "residual aperture ares / a0", lo=0.0, hi=1.0),
+                               "contact traction (deformable)", **_POS, kind=PHYSICS),
+    "fracture_normal_stiffness": param(1e11, "Pa/m", "normal joint stiffness Kn", **_POS, kind=PHYSICS),
+    "fracture_residual_fraction": param(1e-3, "-", "residual aperture ares / a0", lo=0.0, hi=1.0,
+                                        kind=PHYSICS),
     "contact_pairing": param("dual", "-", "how the contact traction meets the opening: dual (lam on the "
                              "nodes of the u trace, dual basis: nodal contact for P1 and P2 u) or consistent "
                              "(P1 lam, L2 pairing: the scheme before issue 13)",
-                             choices=("dual", "consistent")),
+                             choices=("dual", "consistent"), kind=DISCRETISATION),
     "fracture_friction": param(0.6, "-", "Coulomb friction coefficient mu_f of the fracture faces "
-                               "(0: frictionless; 0.6: Byerlee's rock friction)", lo=0.0),
-    "fracture_cohesion": param(0.0, "Pa", "cohesion c0 of the Coulomb law |tau| <= c0 + mu_f lam", lo=0.0),
+                               "(0: frictionless; 0.6: Byerlee's rock friction)", lo=0.0, kind=PHYSICS),
+    "fracture_cohesion": param(0.0, "Pa", "cohesion c0 of the Coulomb law |tau| <= c0 + mu_f lam", lo=0.0,
+                               kind=PHYSICS),
     "fracture_heat_exchange": param("equilibrium", "-", "wall heat exchange: equilibrium, nusselt, or "
-                                    "hw in W/(m2 K)", parse=parse_exchange),
+                                    "hw in W/(m2 K)", parse=parse_exchange, kind=PHYSICS),
     "fracture_supg_wall_conduction": param(False, "-", "with the equilibrium exchange, the rock's wall "
                                            "conduction in the fracture heat's SUPG residual (consistent "
                                            "SUPG: P2 reaches its accuracy; over- or undershoots by "
                                            "1-6 % where the wall layers are thin against the fracture "
-                                           "cells; docs/fracture_th.md)"),
+                                           "cells; docs/fracture_th.md)", kind=DISCRETISATION),
     # state and wells (sections 2, 9)
-    "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0"),
-    "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0"),
+    "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0", kind=PHYSICS),
+    "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0", kind=PHYSICS),
     "insitu_stress": param("60e6", "Pa", "in-situ stress: compressive normal stress on the fracture, or "
-                           "sxx,syy,szz,syz,sxz,sxy (compression positive)", parse=parse_insitu_stress),
-    "surface_temperature": param(20.0, "degC", "temperature of the cooled surface for t > 0"),
-    "injection_rate": param(1e-4, "m3/s", "injection rate Q (per metre in 2D)", lo=0.0),
-    "injection_temperature": param(20.0, "degC", "injected water temperature"),
-    "production_pressure": param(0.0, "Pa", "producer well pressure"),
+                           "sxx,syy,szz,syz,sxz,sxy (compression positive)", parse=parse_insitu_stress,
+                           kind=PHYSICS),
+    "surface_temperature": param(20.0, "degC", "temperature of the cooled surface for t > 0", kind=PHYSICS),
+    "injection_rate": param(1e-4, "m3/s", "injection rate Q (per metre in 2D)", lo=0.0, kind=PHYSICS),
+    "injection_temperature": param(20.0, "degC", "injected water temperature", kind=PHYSICS),
+    "production_pressure": param(0.0, "Pa", "producer well pressure", kind=PHYSICS),
     "production_rate": param(0.0, "m3/s", "producer rate Q_p (0: the producer runs at "
-                             "-thm_production_pressure)", lo=0.0),
-    "well_radius": param(0.1, "m", "well radius r_w (producer well index)", **_POS),
+                             "-thm_production_pressure)", lo=0.0, kind=PHYSICS),
+    "well_radius": param(0.1, "m", "well radius r_w (producer well index)", **_POS, kind=PHYSICS),
     # body force (section 2)
-    "gravity": param(9.81, "m/s2", "gravitational acceleration g (downwards)", lo=0.0),
+    "gravity": param(9.81, "m/s2", "gravitational acceleration g (downwards)", lo=0.0, kind=PHYSICS),
     # optional coupling terms
     "thermomechanical_heating": param(False, "-", "the strain and pressure heating of physics.md "
-                                      "section 6 in the rock heat equation (off: section 6 allows it)"),
+                                      "section 6 in the rock heat equation (off: section 6 allows it)",
+                                      kind=PHYSICS),
 }
 
 # named selections of the declarations, for scenes to compose groups from

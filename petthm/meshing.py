@@ -477,4 +477,20 @@ def _write(gmsh, dim: int, path: str, place=None) -> str:
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     gmsh.write(path)
     gmsh.finalize()
+    check_complete(path)
     return path
+
+
+def check_complete(path: str) -> None:
+    """gmsh does not report a failed write (a full disk leaves a truncated
+    file): a mesh file whose last line is not a section's end ($End...) is
+    an ``OSError`` (ENOSPC when the file system is full)."""
+    import errno
+    with open(path, "rb") as f:
+        f.seek(max(0, os.path.getsize(path) - 64))
+        tail = f.read().rstrip().rsplit(b"\n", 1)[-1]
+    if not tail.startswith(b"$End"):
+        st = os.statvfs(os.path.dirname(os.path.abspath(path)))
+        full = st.f_bavail * st.f_frsize < (1 << 16)
+        raise OSError(errno.ENOSPC if full else errno.EIO,
+                      "No space left on device" if full else "the mesh file was written incompletely", path)

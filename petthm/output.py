@@ -15,6 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from .errors import InputError, WriteFailure, os_error_text
 from .fields import Discretisation, Domain, FieldSpec
 
 TOPOLOGY = {(1, 1): ("Polyline", 2), (1, 2): ("Edge_3", 3),
@@ -23,28 +24,37 @@ TOPOLOGY = {(1, 1): ("Polyline", 2), (1, 2): ("Edge_3", 3),
 
 
 class History:
-    """history.csv: one row per accepted step, written by rank 0 as it goes."""
+    """history.csv: one row per accepted step, written by rank 0 as it goes
+    (collective: every rank calls; a failed write is a ``WriteFailure`` on
+    every rank)."""
 
-    def __init__(self, path: str, columns: Sequence[str], rank: int, append: bool = False):
+    def __init__(self, path: str, columns: Sequence[str], comm, append: bool = False):
+        self.path = path
         self.columns = list(columns)
+        self.comm = comm
         self._file = None
-        if rank == 0:
-            append = append and os.path.isfile(path)
-            self._file = open(path, "a" if append else "w", newline="")
+
+        def start():
+            keep = append and os.path.isfile(path)
+            self._file = open(path, "a" if keep else "w", newline="")
             self._writer = csv.writer(self._file)
-            if not append:
+            if not keep:
                 self._writer.writerow(self.columns)
             self._file.flush()
+        on_root(comm, start, path)
 
     def write(self, row: dict) -> None:
-        if self._file is None:
-            return
-        self._writer.writerow([_fmt(row.get(c, "")) for c in self.columns])
-        self._file.flush()
+        def append():
+            self._writer.writerow([_fmt(row.get(c, "")) for c in self.columns])
+            self._file.flush()
+        on_root(self.comm, append, self.path)
 
     def close(self) -> None:
         if self._file is not None:
-            self._file.close()
+            try:
+                self._file.close()
+            except OSError:             # the last flush on a full disk: the rows written stay
+                pass
             self._file = None
 
 
@@ -57,23 +67,92 @@ def _fmt(v):
     return history_number(v) if isinstance(v, float) else v
 
 
-def write_summary(path: str, summary: dict, rank: int) -> None:
-    if rank == 0:
+def write_summary(path: str, summary: dict, comm) -> None:
+    """summary.json, replaced atomically by rank 0 (collective)."""
+    def write():
         with open(path + ".tmp", "w") as f:
             json.dump(summary, f, indent=2, sort_keys=False, default=float)
         os.replace(path + ".tmp", path)
+    on_root(comm, write, path)
 
 
-def in_turns(comm, write: Callable[[int], None]) -> None:
+def _failure(path: str, error: BaseException) -> str:
+    return f"cannot write {path}: {os_error_text(error)}"
+
+
+#: what a failed write raises in h5py and the file system
+WRITE_ERRORS = (OSError, RuntimeError)
+
+
+def agree_on_failure(comm, message: str | None) -> None:
+    """Raise ``WriteFailure`` on every rank if any rank has a ``message``
+    (collective)."""
+    messages = [m for m in comm.allgather(message) if m]
+    if messages:
+        raise WriteFailure(messages[0])
+
+
+def on_root(comm, action: Callable[[], None], path: str) -> None:
+    """``action()`` on rank 0, which writes ``path``; a failed write is a
+    ``WriteFailure`` on every rank (collective)."""
+    comm = _mpi(comm)
+    message = None
+    if comm.rank == 0:
+        try:
+            action()
+        except WRITE_ERRORS as e:
+            message = _failure(path, e)
+    agree_on_failure(comm, message)
+
+
+def in_turns(comm, write: Callable[[int], None], path: str = "") -> None:
     """Call ``write(rank)`` on one rank after the other, rank 0 first
     (collective).  h5py without MPI-IO cannot open a file on several ranks at
     once; taking turns lets each rank write its own part of one file, so
     nothing of field size is gathered on a rank (memory per rank stays that
-    of its part; the writes are serial in time)."""
+    of its part; the writes are serial in time).  A failed write (of
+    ``path``) is a ``WriteFailure`` on every rank; no rank writes after it."""
+    comm = _mpi(comm)
+    message = None
     for r in range(comm.size):
-        if comm.rank == r:
-            write(r)
-        comm.barrier()
+        if comm.rank == r and message is None:
+            try:
+                write(r)
+            except WRITE_ERRORS as e:
+                message = _failure(path, e)
+        message = comm.bcast(message, root=r)     # the next turn starts after this one's write
+    if message:
+        raise WriteFailure(message)
+
+
+def check_space(comm, path: str, nbytes: int) -> None:
+    """A ``WriteFailure`` on every rank if the file system of ``path`` has
+    less free space than the ``nbytes`` the ranks are about to write there
+    (their sum, with a margin for HDF5's metadata): a write is refused
+    before it can leave a half-written file (collective)."""
+    comm = _mpi(comm)
+    total = comm.allreduce(int(nbytes))
+    message = None
+    if comm.rank == 0:
+        try:
+            st = os.statvfs(os.path.dirname(os.path.abspath(path)))
+            free = st.f_bavail * st.f_frsize
+        except OSError:
+            free = None
+        need = int(1.1 * total) + SPACE_MARGIN
+        if free is not None and free < need:
+            message = (f"cannot write {path}: No space left on device ({free} bytes free, "
+                       f"{need} needed)")
+    agree_on_failure(comm, message)
+
+
+#: the free space kept beyond an output's own size (bytes): HDF5's metadata, the XDMF (256 KiB)
+SPACE_MARGIN = 1 << 18
+
+
+def _mpi(comm):
+    """An mpi4py communicator of ``comm`` (a petsc4py or mpi4py one)."""
+    return comm.tompi4py() if hasattr(comm, "tompi4py") else comm
 
 
 class FieldWriter:
@@ -107,8 +186,6 @@ class FieldWriter:
         nodes = Discretisation(mesh, [FieldSpec("node", 1, degree, region)], dm=dmo, regions=regions)
         mesh_parts = self._number_nodes(nodes)
         dmo.destroy()
-        if self.rank == 0:
-            os.makedirs(directory, exist_ok=True)
         resume = resume_at is not None and os.path.isfile(self.h5path)
         self.group, new_mesh = self._resume(resume_at, mesh_parts) if resume else ("mesh", True)
         if new_mesh:
@@ -152,48 +229,70 @@ class FieldWriter:
                 if rank == 0 and attrs:
                     for k, v in attrs.items():
                         h5.attrs[k] = v
-        in_turns(self.comm, write)
+        check_space(self.comm, self.h5path, sum(np.asarray(p[0]).nbytes for p in parts.values()))
+        in_turns(self.comm, write, self.h5path)
 
     def _resume(self, t: float, mesh_parts: dict) -> tuple[str, bool]:
         """Go on with the series of an earlier run (restart): keep its outputs
         up to time t, drop the later ones.  Returns the mesh group to go on
         with, and whether it is new: the last one if it holds this run's mesh
         (same partition), else a new name (collective)."""
-        import h5py
+        message = None
         if self.rank == 0:
-            with h5py.File(self.h5path, "a") as h5:
-                times = list(h5.attrs.get("times", []))
-                keep = sum(1 for s in times if s <= t * (1 + 1e-12) + 1e-300)
-                groups = [str(g) for g in h5.attrs.get("meshes", ["mesh"] * len(times))][:keep]
-                for name in list(h5.get("fields", {})):
-                    for k in list(h5["fields"][name]):
-                        if int(k) >= keep:
-                            del h5["fields"][name][k]
-                h5.attrs["times"], h5.attrs["meshes"] = times[:keep], groups
-                for k, s in enumerate(times[:keep]):
-                    data = [(name, h5["fields"][name][str(k)]) for name in h5.get("fields", {})
-                            if str(k) in h5["fields"][name]]
-                    cells, nodes = (h5[f"{groups[k]}/{d}"].shape[0] for d in ("topology", "geometry"))
-                    self._steps.append((s, [(name, 1 if d.ndim == 1 else d.shape[1]) for name, d in data],
-                                        groups[k], cells, nodes))
-                last = groups[-1] if groups else "mesh"
-                taken = sorted(g for g in h5 if g.startswith("mesh"))
+            try:
+                last, taken = self._keep_outputs_to(t)
+            except (OSError, KeyError, ValueError, RuntimeError, TypeError) as e:
+                message = unreadable(self.h5path, e)
+        message = self.comm.bcast(message, root=0)
+        if message:
+            raise InputError(message)
         self._steps, last, taken = self.comm.bcast(
             (self._steps, last, taken) if self.rank == 0 else None, root=0)
         if self._same_mesh(last, mesh_parts):
             return last, False
-        return next(f"mesh_{i}" for i in range(1, len(taken) + 1) if f"mesh_{i}" not in taken), True
+        return next(f"mesh_{i}" for i in range(1, len(taken) + 2) if f"mesh_{i}" not in taken), True
+
+    def _keep_outputs_to(self, t: float) -> tuple[str, list[str]]:
+        """Drop the outputs after time t from the file (rank 0); returns the
+        last mesh group kept and the mesh groups in the file."""
+        import h5py
+        with h5py.File(self.h5path, "r+") as h5:
+            if "times" not in h5.attrs:
+                raise KeyError("it holds no output series")
+            times = list(h5.attrs["times"])
+            keep = sum(1 for s in times if s <= t * (1 + 1e-12) + 1e-300)
+            groups = [str(g) for g in h5.attrs.get("meshes", ["mesh"] * len(times))][:keep]
+            for name in list(h5.get("fields", {})):
+                for k in list(h5["fields"][name]):
+                    if int(k) >= keep:
+                        del h5["fields"][name][k]
+            h5.attrs["times"], h5.attrs["meshes"] = times[:keep], groups
+            for k, s in enumerate(times[:keep]):
+                data = [(name, h5["fields"][name][str(k)]) for name in h5.get("fields", {})
+                        if str(k) in h5["fields"][name]]
+                cells, nodes = (h5[f"{groups[k]}/{d}"].shape[0] for d in ("topology", "geometry"))
+                self._steps.append((s, [(name, 1 if d.ndim == 1 else d.shape[1]) for name, d in data],
+                                    groups[k], cells, nodes))
+            last = groups[-1] if groups else "mesh"
+            taken = sorted(g for g in h5 if g.startswith("mesh"))
+        return last, taken
 
     def _same_mesh(self, group: str, mesh_parts: dict) -> bool:
         """Whether group holds this run's mesh: each rank compares its own rows
         (collective)."""
         import h5py
-        same = True
-        with h5py.File(self.h5path, "r") as h5:
-            for name in ("topology", "geometry"):
-                rows, shape, (lo, hi), _ = mesh_parts[name]
-                d = h5.get(f"{group}/{name}")
-                same &= d is not None and d.shape == shape and np.array_equal(d[lo:hi], rows)
+        same, message = True, None
+        try:
+            with h5py.File(self.h5path, "r") as h5:
+                for name in ("topology", "geometry"):
+                    rows, shape, (lo, hi), _ = mesh_parts[name]
+                    d = h5.get(f"{group}/{name}")
+                    same &= d is not None and d.shape == shape and np.array_equal(d[lo:hi], rows)
+        except (OSError, KeyError, ValueError, RuntimeError) as e:
+            message = unreadable(self.h5path, e)
+        messages = [m for m in self.comm.allgather(message) if m]
+        if messages:
+            raise InputError(messages[0])
         return bool(self.comm.allreduce(int(same), op=_min()))
 
     def write(self, t: float, fields: dict[str, np.ndarray]) -> None:
@@ -214,8 +313,7 @@ class FieldWriter:
         self._steps.append((t, entries, self.group, self.ncells, self.nnodes))
         self._write_parts(parts, attrs={"times": [s[0] for s in self._steps],
                                         "meshes": [s[2] for s in self._steps]})
-        if self.rank == 0:
-            self._write_xdmf()
+        on_root(self.comm, self._write_xdmf, self.xdmfpath)
 
     def _write_xdmf(self) -> None:
         topo, npc = TOPOLOGY[(self.rdim, self.degree)]
@@ -244,17 +342,31 @@ class FieldWriter:
         os.replace(self.xdmfpath + ".tmp", self.xdmfpath)
 
 
-def read_output(h5path: str, step: int = -1) -> tuple[np.ndarray, np.ndarray, float, dict]:
+def read_output(path: str, step: int = -1) -> tuple[np.ndarray, np.ndarray, float, dict]:
     """(geometry, topology, time, {field: values}) of output ``step`` of a
-    ``fields.h5`` / ``fracture.h5`` (its own mesh group, after a restart too)."""
+    run's ``fields`` / ``fracture`` series (its own mesh group, after a
+    restart too); ``path``: the series' ``.h5`` or its ``.xdmf``.  A file
+    that is not such a series is a ``ValueError`` naming it."""
     import h5py
-    with h5py.File(h5path, "r") as h5:
-        times = list(h5.attrs["times"])
-        k = range(len(times))[step]
-        group = str(list(h5.attrs.get("meshes", ["mesh"] * len(times)))[k])
-        fields = {name: h5["fields"][name][str(k)][()] for name in h5.get("fields", {})
-                  if str(k) in h5["fields"][name]}
-        return h5[f"{group}/geometry"][()], h5[f"{group}/topology"][()], float(times[k]), fields
+    h5path = os.path.splitext(path)[0] + ".h5" if path.endswith(".xdmf") else path
+    try:
+        with h5py.File(h5path, "r") as h5:
+            times = list(h5.attrs["times"])
+            if not -len(times) <= step < len(times):
+                raise IndexError(f"{h5path} has outputs 0 to {len(times) - 1}, not {step}")
+            k = range(len(times))[step]
+            group = str(list(h5.attrs.get("meshes", ["mesh"] * len(times)))[k])
+            fields = {name: h5["fields"][name][str(k)][()] for name in h5.get("fields", {})
+                      if str(k) in h5["fields"][name]}
+            return h5[f"{group}/geometry"][()], h5[f"{group}/topology"][()], float(times[k]), fields
+    except (OSError, KeyError) as e:
+        raise ValueError(f"{h5path} is not a readable petthm field series ({os_error_text(e)})") from None
+
+
+def unreadable(path: str, error: BaseException) -> str:
+    """The one-line error for an output file of an earlier run that cannot be read."""
+    return (f"{path} cannot be read ({os_error_text(error)}): the file is truncated or damaged; "
+            "restore it, or start a new run (another -thm_output_dir, or -thm_overwrite)")
 
 
 def _max():

@@ -21,15 +21,28 @@ from .errors import InputError
 PREFIX = "thm_"
 CELSIUS = 273.15
 
+#: what an option sets (its ``kind``).  A restart continues the same
+#: problem: an option of a kind in ``FIXED_ON_RESTART`` must keep its value
+#: (``checkpoint.check_options``); the others may change.
+PHYSICS, MESH, DISCRETISATION = "physics", "mesh", "discretisation"
+TIME, SOLVER, OUTPUT, RUN = "time schedule", "solver", "output", "run control"
+KINDS = (PHYSICS, MESH, DISCRETISATION, TIME, SOLVER, OUTPUT, RUN)
+FIXED_ON_RESTART = (PHYSICS, MESH, DISCRETISATION)
+
 
 def param(default: Any, unit: str, help: str, lo: float | None = None, hi: float | None = None,
           lo_open: bool = False, choices: tuple | None = None, option: str | None = None,
-          parse: Callable[[str], Any] | None = None):
+          parse: Callable[[str], Any] | None = None, *, kind: str):
     """Declare a parameter: default (SI, degC for temperatures), unit, help,
     accepted range; ``parse``: text -> value (raising InputError) for values
-    that are not plain numbers (applied to the default too)."""
+    that are not plain numbers (applied to the default too); ``kind``: one
+    of ``KINDS``, what the option sets (a restart keeps physics, mesh and
+    discretisation)."""
+    if kind not in KINDS:
+        raise ValueError(f"kind {kind!r} is not one of {', '.join(KINDS)}")
     return dataclasses.field(default=default, metadata=dict(
-        unit=unit, help=help, lo=lo, hi=hi, lo_open=lo_open, choices=choices, option=option, parse=parse))
+        unit=unit, help=help, lo=lo, hi=hi, lo_open=lo_open, choices=choices, option=option, parse=parse,
+        kind=kind))
 
 
 def option_name(f: dataclasses.Field) -> str:
@@ -132,6 +145,50 @@ def values_in_effect(p) -> dict:
     return out
 
 
+def option_kind(f: dataclasses.Field) -> str:
+    return f.metadata["kind"]
+
+
+#: PETSc option prefixes that set the time discretisation (a restart keeps them)
+_TIME_SCHEMES = ("ts_type", "ts_bdf_", "ts_theta_", "ts_alpha_", "ts_arkimex_", "ts_rk_", "ts_rosw_")
+#: PETSc option prefixes that set how the run is run or reported
+_RUN_CONTROL = ("ts_max_steps", "options_", "log_", "help", "malloc", "info", "history", "on_error",
+                "no_signal_handler", "fp_trap", "memory_view", "mpi_")
+
+
+def petsc_option_kind(name: str) -> str:
+    """The kind of a PETSc option (``KINDS``): ``-dm_*`` (refinement, the
+    plex's options) set the mesh, ``-ts_type`` and the schemes' options the
+    time discretisation, ``-ts_max_time`` the schedule's end; viewers and
+    monitors are output; the rest configures the solvers."""
+    if name.startswith("dm_") and "view" not in name and "check" not in name:
+        return MESH
+    if name.startswith(_TIME_SCHEMES):
+        return DISCRETISATION
+    if name == "ts_max_time":
+        return TIME
+    if name.startswith(_RUN_CONTROL):
+        return RUN
+    if "view" in name or "monitor" in name:
+        return OUTPUT
+    return SOLVER
+
+
+def option_record(parameter_sets, petsc_options: dict[str, str]) -> dict:
+    """{-option: {"kind", "value"}} of every -thm_* option of the parameter
+    objects (the value in effect, as ``values_in_effect`` gives it) and of
+    the given PETSc options (name without the dash: value): what a
+    checkpoint records so that a restart can be checked against it."""
+    out = {}
+    for p in parameter_sets:
+        kinds = {"-" + option_name(f): option_kind(f) for f in dataclasses.fields(p)}
+        out.update({k: {"kind": kinds[k], "value": v} for k, v in values_in_effect(p).items()})
+    for name, value in petsc_options.items():
+        if not name.startswith(PREFIX):
+            out["-" + name] = {"kind": petsc_option_kind(name), "value": value}
+    return out
+
+
 def with_defaults(cls, **defaults):
     """A copy of a parameter dataclass with other default values (same options)."""
     fields = []
@@ -169,48 +226,64 @@ def help_text(classes: Iterable[type]) -> str:
             rng = _range_text(md) if (md.get("lo") is not None or md.get("hi") is not None
                                       or md.get("choices")) else ""
             lines.append(f"    -{option_name(f):<34} {str(d):>12} {md['unit']:<10} {md['help']}"
-                         + (f"  {rng}" if rng else ""))
+                         + (f"  {rng}" if rng else "") + f"  [{md['kind']}]")
     return "\n".join(lines)
 
 
 @dataclasses.dataclass(frozen=True)
 class RunParams:
     """Run control (all scenes)"""
-    output_dir: str = param("", "-", "output folder (default output/SCENE)")
-    mesh_file: str = param("", "-", "gmsh mesh file to use instead of the scene's generated mesh")
-    mesh_size: float = param(0.0, "m", "characteristic mesh size (0: scene default)", lo=0.0)
-    fe_degree: int = param(2, "-", "Lagrange degree of the matrix fields", choices=(1, 2))
-    quadrature_degree: int = param(0, "-", "quadrature degree (0: 2 x element degree)", lo=0, hi=20)
-    final_time: float = param(0.0, "s", "end time (0: scene default)", lo=0.0)
-    dt_initial: float = param(0.0, "s", "first time step (0: scene default)", lo=0.0)
-    dt_growth: float = param(0.0, "-", "time-step growth factor per step (0: scene default)", lo=0.0)
-    dt_max: float = param(0.0, "s", "largest time step (0: scene default)", lo=0.0)
+    output_dir: str = param("", "-", "output folder (default output/SCENE); a folder with another run's "
+                            "output is refused (see -thm_overwrite, -thm_restart)", kind=OUTPUT)
+    overwrite: bool = param(False, "-", "replace the output of an earlier run in the output folder (the "
+                            "files of its manifest; nothing else in the folder is touched)", kind=RUN)
+    mesh_file: str = param("", "-", "gmsh mesh file to use instead of the scene's generated mesh", kind=MESH)
+    mesh_size: float = param(0.0, "m", "characteristic mesh size (0: scene default; at most the "
+                             "domain's largest extent)", lo=0.0, kind=MESH)
+    fe_degree: int = param(2, "-", "Lagrange degree of the matrix fields", choices=(1, 2),
+                           kind=DISCRETISATION)
+    quadrature_degree: int = param(0, "-", "quadrature degree (0: 2 x element degree)", lo=0, hi=20,
+                                   kind=DISCRETISATION)
+    final_time: float = param(0.0, "s", "end time (0: scene default)", lo=0.0, kind=TIME)
+    dt_initial: float = param(0.0, "s", "first time step (0: scene default)", lo=0.0, kind=TIME)
+    dt_growth: float = param(0.0, "-", "time-step growth factor per step (0: scene default)", lo=0.0,
+                             kind=TIME)
+    dt_max: float = param(0.0, "s", "largest time step (0: scene default)", lo=0.0, kind=TIME)
     dt_control: str = param("schedule", "-", "time steps from the scene's schedule (first step, growth, "
                             "largest step), or from an estimate of backward Euler's local error "
                             "(PETSc's TS adaptivity: -ts_adapt_*, tolerance -ts_atol on the scaled "
-                            "unknowns, default 1e-3 of each field's range)", choices=("schedule", "error"))
+                            "unknowns, default 1e-3 of each field's range)", choices=("schedule", "error"),
+                            kind=TIME)
     dt_courant: float = param(0.0, "cells", "also limit each next step so that a temperature front "
                               "(fracture Tf; rock Tm where water flows through it) moves at most this "
-                              "many cells per step, from the last step's change (0: no limit)", lo=0.0)
-    output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0)
-    quiet: bool = param(False, "-", "no per-step progress line")
+                              "many cells per step, from the last step's change (0: no limit)", lo=0.0,
+                              kind=TIME)
+    output_interval: int = param(0, "steps", "write fields every N steps (0: scene default)", lo=0,
+                                 kind=OUTPUT)
+    quiet: bool = param(False, "-", "no per-step progress line", kind=OUTPUT)
     max_cells: int = param(5_000_000, "cells", "refuse a generated mesh that would have more cells "
-                           "than this (checked before meshing, from the far-field size)", lo=1)
+                           "than this (checked before meshing, from the far-field size)", lo=1, kind=RUN)
     checkpoint_interval: int = param(10, "steps", "write checkpoint.h5 every N accepted steps (0: only "
-                                     "at the end and when a signal stops the run)", lo=0)
+                                     "at the end and when a signal stops the run)", lo=0, kind=OUTPUT)
     checkpoint_wall: float = param(0.0, "s", "also write checkpoint.h5 when this much wall time has "
-                                   "passed since the last one (0: by steps only)", lo=0.0)
+                                   "passed since the last one (0: by steps only)", lo=0.0, kind=OUTPUT)
+    max_wall: float = param(0.0, "s", "stop cleanly after the first step that ends past this much wall "
+                            "time, with a checkpoint (status stopped, exit code 3; 0: no limit)", lo=0.0,
+                            kind=RUN)
     restart: str = param("", "-", "continue the run whose output folder this is, from its "
-                         "checkpoint.h5 (same options and rank count; output goes on in that folder)")
+                         "checkpoint.h5 (same physics, mesh and discretisation; output goes on in that "
+                         "folder)", kind=RUN)
     predictor: str = param("linear", "-", "Newton's first iterate of a time step: linear (on the line "
                            "through the last two accepted states) or none (the last state)",
-                           choices=("linear", "none"))
+                           choices=("linear", "none"), kind=SOLVER)
     pc_reuse: str = param("auto", "-", "reuse the preconditioner across Newton iterations and time "
                           "steps, rebuilt when the extra Krylov iterations have cost a set-up or a step "
                           "fails: on, off, or auto (on for a direct solve without friction)",
-                          choices=("auto", "on", "off"))
+                          choices=("auto", "on", "off"), kind=SOLVER)
     pc_reuse_max_krylov: int = param(0, "-", "rebuild a reused preconditioner after a linear solve with "
-                                     "more iterations than this (0: the cost rule of -thm_pc_reuse)", lo=0)
+                                     "more iterations than this (0: the cost rule of -thm_pc_reuse)", lo=0,
+                                     kind=SOLVER)
     direct_max_unknowns: int = param(50000, "-", "scenes with displacement propose the block "
                                      "preconditioner of options/solvers/block.opts above this many "
-                                     "unknowns and a direct solve up to it (docs/solvers.md)", lo=0)
+                                     "unknowns and a direct solve up to it (docs/solvers.md)", lo=0,
+                                     kind=SOLVER)

@@ -18,7 +18,7 @@ from typing import Callable
 from petsc4py import PETSc
 
 from . import fieldsplit
-from .errors import InputError
+from .errors import InputError, WriteFailure
 from .fieldsplit import VIFieldSplit  # noqa: F401  (-pc_python_type petthm.solver.VIFieldSplit)
 from .courant import FrontStepLimit
 from .predictor import LinearPredictor
@@ -174,7 +174,8 @@ class TimeStepper:
         ts.setMonitor(self._monitor)
         self.rejected = 0
         self.error = None
-        self.stopped: str | None = None
+        self.stopped: str | None = None          # why the run was stopped (a signal, -thm_max_wall)
+        self.stop_status = "interrupted"         # its status: interrupted (a signal) or stopped
         self.failure: str | None = None          # why the run was stopped as failed (not a TS reason)
         adaptive = PETSc.Options(ts.getOptionsPrefix()).getString("ts_adapt_type", "none") != "none"
         self._start_schedule(control, ts.getTimeStep(), adaptive)
@@ -226,8 +227,11 @@ class TimeStepper:
         c = self.control
         t = ts.getTime()
         if c.collapsed(ts.getTimeStep(), t):
+            tries = ts.getStepRejections()
+            cause = (f"after {tries} rejected tries" if tries else
+                     f"none rejected: the schedule's growth factor {c.growth:g} < 1 shrank it")
             self.failure = (f"the time step collapsed to {ts.getTimeStep():.3g} s at t = {t:.6g} s "
-                            f"(below {c.dt_floor():.3g} s, after rejected steps): the run cannot go on")
+                            f"(below {c.dt_floor():.3g} s, {cause}): the run cannot go on")
             self._stop_now()
             return
         if self.adaptive:                      # the TS's error estimate chose the next step
@@ -307,7 +311,7 @@ class TimeStepper:
         try:
             self._user_monitor(step, t, X)
         except Exception as e:  # noqa: BLE001 - re-raised after TSSolve returns
-            if ts.comm.size > 1 and not isinstance(e, InputError):
+            if ts.comm.size > 1 and not isinstance(e, (InputError, WriteFailure)):
                 _abort_all(ts.comm,
                            f"rank {ts.comm.rank}: the step monitor failed at step {step}, t = {t:.6g} s")
             self.error = e
@@ -329,10 +333,12 @@ class TimeStepper:
         return {k: math.nan if getattr(self, "_" + k) is None else getattr(self, "_" + k)
                 for k in ("last_dt_cut", "recover_to")}
 
-    def request_stop(self, message: str) -> None:
+    def request_stop(self, message: str, status: str = "interrupted") -> None:
         """Stop after the current step (from the monitor; collective): the
-        run ends with status interrupted and ``message``."""
+        run ends with ``status`` (interrupted: a signal; stopped: a limit
+        the user set) and ``message``."""
         self.stopped = message
+        self.stop_status = status
         self._stop_now()
 
     def fail(self, message: str) -> None:

@@ -51,6 +51,21 @@ class StepControl:
         the last step, clipped to land on the end time, may be shorter."""
         return dt < self.dt_floor() and t < self.final_time * (1 - 1e-12)
 
+    def check_reachable(self, end: float, option: str = "") -> None:
+        """Steps that shrink (growth < 1) add up to at most dt_initial / (1 -
+        growth): short of ``end``, the run could never reach it (an
+        ``InputError`` naming ``option``, the growth's, or the scene's
+        default)."""
+        if self.growth >= 1.0:
+            return
+        reach = self.dt_initial / (1.0 - self.growth) if self.growth > 0 else self.dt_initial
+        if reach < end:
+            from .errors import InputError
+            name = f"option -{option}" if option else "the scene's time-step growth"
+            raise InputError(f"{name} = {self.growth:g}: steps shrinking by this factor from the first "
+                             f"step {self.dt_initial:g} s add up to at most {reach:.4g} s, short of the end "
+                             f"time {end:.6g} s (a growth factor >= 1 keeps or grows the steps)")
+
     def steps_left(self, t: float, dt: float) -> int:
         """Steps from t to the final time when the last step was dt: each
         next step min(dt growth, dt_max), the last one clipped (for the

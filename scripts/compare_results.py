@@ -132,7 +132,8 @@ def run(tree: str, out: str, only: list[str]) -> None:
         if only and case not in only:
             continue
         d = os.path.join(out, case)
-        cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", d, "-thm_quiet",
+        replace = ["-thm_overwrite"] if os.path.exists(os.path.join(tree, "petthm", "rundir.py")) else []
+        cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", d, "-thm_quiet", *replace,
                *map(str, _translate(tree, case, opts))]
         p = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
         s = json.load(open(os.path.join(d,

@@ -35,5 +35,6 @@ fi
 # petthm's own pure-Python dependencies that the PETSc build step does not bring (kept apart from it: a
 # cached environment made before a dependency was added gets it here)
 python -c "import sympy" 2>/dev/null || python -m pip install -q sympy
+python -c "import iapws" 2>/dev/null || python -m pip install -q iapws
 python -m pip install -q --no-deps --no-build-isolation -e "$here"
 python -c "from petsc4py import PETSc; print('petsc4py in $VENV: PETSc', '.'.join(map(str, PETSc.Sys.getVersion())))"

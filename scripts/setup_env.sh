@@ -33,7 +33,7 @@ PY
 }
 
 if [ -x "$VENV/bin/python" ] && has_petsc4py "$VENV/bin/python" && ! old_numpy "$VENV/bin/python" \
-   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, mpi4py, ruff" 2>/dev/null; then
+   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, mpi4py, ruff, iapws" 2>/dev/null; then
   exit 0
 fi
 
@@ -56,7 +56,7 @@ else
 fi
 PIP="$VENV/bin/python -m pip"
 need=""
-for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pytest mpi4py:mpi4py ruff:ruff; do
+for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pytest mpi4py:mpi4py ruff:ruff iapws:iapws; do
   "$VENV/bin/python" -c "import ${mod%%:*}" 2>/dev/null || need="$need ${mod#*:}"
 done
 [ -z "$need" ] || $PIP install -q $need

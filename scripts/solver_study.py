@@ -49,7 +49,8 @@ COLUMNS = [("solver", "solver", ""), ("level", "level", ""), ("ranks", "ranks", 
 
 
 def run_case(scene, out, opts, ranks):
-    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out, "-thm_quiet", *opts]
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out, "-thm_quiet", "-thm_overwrite",
+           *opts]
     if ranks > 1:
         cmd = ["mpiexec", "-n", str(ranks)] + cmd
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=dict(os.environ, **MPI_ENV))

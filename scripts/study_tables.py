@@ -17,9 +17,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 def run_petthm(scene: str, out_dir: str, *opts) -> dict:
     """Run ``python -m petthm SCENE -thm_output_dir OUT_DIR -thm_quiet OPTS``
     from the repository root on one core (one BLAS/OpenMP thread, so that
-    studies may run cases side by side) and return its summary.json.  A failed
-    run prints its output and stops the study."""
-    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out_dir, "-thm_quiet", *map(str, opts)]
+    studies may run cases side by side) and return its summary.json.  A study
+    owns its run folders: a rerun replaces its earlier run there
+    (-thm_overwrite).  A failed run prints its output and stops the study."""
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out_dir, "-thm_quiet", "-thm_overwrite",
+           *map(str, opts)]
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
     if p.returncode:

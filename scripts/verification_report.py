@@ -179,8 +179,9 @@ STABILITY = [
                                  "-thm_dt_growth", 1.0),
               bounds=_SCENE3_BOUNDS,
               test="tests/verification/test_scene3.py::test_scene3_thin_first_layer_starts"),
-    Stability("water at 250 degC in a fracture (Lauwerier, mu(T))", "lauwerier",
-              ("-thm_initial_temperature", 250, "-thm_fluid_viscosity", "water", "-thm_final_time", 1e6,
+    Stability("water at 250 degC in a fracture (Lauwerier, mu(T))", "lauwerier",     # at 5 MPa: liquid
+              ("-thm_initial_temperature", 250, "-thm_initial_pressure", 5e6, "-thm_production_pressure", 5e6,
+               "-thm_fluid_viscosity", "water", "-thm_final_time", 1e6,
                "-thm_mesh_size", 20, "-thm_lauwerier_fracture_size", 5)),     # coarse: higher cell Peclet
 ]
 
@@ -193,7 +194,8 @@ def run(scene: str, out: str, opts) -> tuple[dict | None, str, float]:
     if REUSE and os.path.exists(os.path.join(out, "summary.json")):
         s = read_summary(out)
         return s, "", s["wall_time"]["total"]
-    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out, "-thm_quiet", *map(str, opts)]
+    cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out, "-thm_quiet", "-thm_overwrite",
+           *map(str, opts)]
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     t0 = time.perf_counter()
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)

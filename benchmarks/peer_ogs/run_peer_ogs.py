@@ -380,7 +380,7 @@ def run_petthm(case: str, out: Path, t_end: float, root: Path) -> dict:
     if bdf2:
         opts += ["-ts_type", "bdf", "-ts_bdf_order", 2]
     cmd = [sys.executable, "-m", "petthm", "lauwerier", "-thm_output_dir", str(d), "-thm_quiet",
-           *map(str, opts)]
+           "-thm_overwrite", *map(str, opts)]
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     load = load_avg()
     t0 = time.perf_counter()

@@ -21,6 +21,7 @@ import numpy as np
 from .. import params as P
 from ..assembly import FieldScale
 from ..constraints import Dirichlet
+from ..errors import InputError
 from ..fracture import TIP_BC
 from ..materials import Parameters
 from ..model import Model
@@ -41,7 +42,15 @@ class Monitor:
     (and for the initial state) returns the history row's scene columns;
     ``report(problem, t)`` the scene's part of summary.json.  Subclasses keep
     the run's state (worst errors, samples at given times) as attributes
-    created in their ``__init__``."""
+    created in their ``__init__``; those that gather over the steps are
+    named in ``carried`` (dotted names reach into a part, ``"base.worst"``)
+    and go into the checkpoint, so that a restarted run reports the whole
+    run.  Their values are plain data and the same on every rank."""
+
+    #: the attributes that hold what the monitor gathered over the steps (see the class docstring)
+    carried: tuple[str, ...] = ()
+    #: the files (in the output folder) ``report`` writes
+    files: tuple[str, ...] = ()
 
     def __call__(self, problem, t: float, X=None) -> dict:
         return {}
@@ -54,6 +63,36 @@ class Monitor:
         on every rank: a value of global reductions), or None.  The run then
         ends as failed with this message, the step's state written."""
         return None
+
+    def carried_state(self) -> dict:
+        """{name: value} of the ``carried`` attributes (for the checkpoint)."""
+        return {name: _attribute(self, name) for name in self.carried}
+
+    def restore(self, state: dict) -> None:
+        """Put back ``carried_state``'s values, in place: a part that the
+        monitor shares with another (a ``Worst`` of the balances and of the
+        temperature range) stays shared."""
+        for name, value in state.items():
+            if name not in self.carried:
+                continue
+            owner, _, last = name.rpartition(".")
+            holder = _attribute(self, owner) if owner else self
+            now = getattr(holder, last)
+            if isinstance(now, dict) and isinstance(value, dict):
+                now.clear()
+                now.update(value)
+            elif isinstance(now, list) and isinstance(value, list):
+                now[:] = value
+            elif hasattr(now, "__dict__") and type(now) is type(value):
+                vars(now).update(vars(value))
+            else:
+                setattr(holder, last, value)
+
+
+def _attribute(obj, dotted: str):
+    for part in dotted.split("."):
+        obj = getattr(obj, part)
+    return obj
 
 
 @dataclass
@@ -122,6 +161,11 @@ class Scene:
     history_columns: tuple = ()
     dimension: int | None = None       # the space dimension of a scene without a -thm_*_dim option
 
+    #: pressures are gauge (absolute = p + 101 325 Pa); False: absolute (physics.md section 8)
+    gauge_pressure: bool = True
+    #: the pressure (Pa; gauge or absolute as above) of the water of a scene without a pressure option
+    water_pressure: float | None = None
+
     def __init__(self, run: P.RunParams, p: Parameters):
         self.run = run
         self.p = p
@@ -152,6 +196,64 @@ class Scene:
             if f.name.endswith("_dim"):
                 return int(getattr(self.p, f.name)), P.option_name(f)
         return self.dimension, ""
+
+    # checks of the input ---------------------------------------------------------
+    def check_inputs(self) -> None:
+        """Values inside their option's range that are impossible for the
+        scene, before anything is built (an ``InputError`` naming the option
+        and the bound): every temperature given where there is water must be
+        liquid water at the pressure there (``fluid.check_liquid``)."""
+        from ..fluid import check_liquid
+        for option, T, p_abs, where in self.water_temperatures():
+            check_liquid(option, T, p_abs, where)
+
+    def has_water(self) -> bool:
+        """Whether the scene's rock or fracture holds water (it declares fluid properties)."""
+        import dataclasses
+        return any(f.name.startswith("fluid_") for f in dataclasses.fields(self.p))
+
+    def water_temperatures(self) -> list[tuple[str, float, float, str]]:
+        """(option, temperature in degC, absolute pressure in Pa, where the
+        pressure comes from) of every temperature option of a scene with
+        water: initial, injection and boundary temperatures, at the initial
+        pressure (-thm_initial_pressure, else ``water_pressure``)."""
+        import dataclasses
+        from ..fluid import ATMOSPHERE
+        if not self.has_water():
+            return []
+        temps = [f for f in dataclasses.fields(self.p) if f.metadata["unit"] == "degC"]
+        if not temps:
+            return []
+        if hasattr(self.p, "initial_pressure"):
+            p, where = self.p.initial_pressure, f"-thm_initial_pressure = {self.p.initial_pressure:g} Pa"
+        elif self.water_pressure is not None:
+            p, where = self.water_pressure, f"scene {self.name}'s water at {self.water_pressure:g} Pa"
+        else:
+            raise TypeError(f"scene {self.name} has water temperatures but declares no water pressure")
+        p_abs = p + ATMOSPHERE if self.gauge_pressure else p
+        where += ", gauge" if self.gauge_pressure else ", absolute"
+        return [(P.option_name(f), getattr(self.p, f.name), p_abs, where) for f in temps]
+
+    def check_against_domain(self, lower, upper) -> None:
+        """Lengths that cannot fit the domain (the mesh's bounding box
+        ``lower``-``upper``): a mesh size of the scene's mesh generator
+        (-thm_mesh_size, a scene's -thm_*_size in m) larger than the domain's
+        largest extent, and a well radius of half its smallest extent or more."""
+        import dataclasses
+        extent = np.asarray(upper, dtype=float) - np.asarray(lower, dtype=float)
+        largest, smallest = float(extent.max()), float(extent.min())
+        generated = not self.run.mesh_file
+        sizes = [(P.option_name(f), getattr(obj, f.name)) for obj in (self.run, self.p)
+                 for f in dataclasses.fields(obj)
+                 if generated and "mesh size" in f.metadata["help"] and f.metadata["unit"] == "m"]
+        for option, h in sizes:
+            if h > largest:
+                raise InputError(f"option -{option} = {h:g} m is larger than the domain (its largest extent "
+                                 f"is {largest:.4g} m): at most {largest:.4g} m")
+        r_w = getattr(self.p, "well_radius", None)
+        if r_w is not None and r_w >= 0.5 * smallest:
+            raise InputError(f"option -thm_well_radius = {r_w:g} m does not fit in the domain (its smallest "
+                             f"extent is {smallest:.4g} m): less than {0.5 * smallest:.4g} m")
 
     # hooks ------------------------------------------------------------------
     def boundaries(self) -> dict[str, Callable[[np.ndarray], np.ndarray]]:

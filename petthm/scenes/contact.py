@@ -33,7 +33,7 @@ from ..kernels import contact as ct
 from ..kernels import poroelastic as pe
 from ..model import FRACTURE
 from ..monitors import fracture_vertices
-from ..params import param
+from ..params import MESH, PHYSICS, param
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
 
@@ -100,11 +100,11 @@ def mechanics_model(p, mesh, degree, pressure, normal_stress: float, u_scale: fl
 class SneddonParams:
     """Pressurised crack in an infinite solid (sneddon; verification.md section 4)"""
     sneddon_dim: int = param(3, "-", "3: penny crack (quarter model), 2: Griffith crack (half model)",
-                             choices=(2, 3))
+                             choices=(2, 3), kind=MESH)
     sneddon_radius: float = param(100.0, "m", "crack radius R (3D) or half-length c (2D)", lo=0.0,
-                                  lo_open=True)
-    sneddon_box: float = param(20.0, "-", "domain half-size / R", lo=2.0)
-    sneddon_crack_size: float = param(0.05, "-", "mesh size on the crack / R", lo=1e-4, hi=1.0)
+                                  lo_open=True, kind=MESH)
+    sneddon_box: float = param(20.0, "-", "domain half-size / R", lo=2.0, kind=MESH)
+    sneddon_crack_size: float = param(0.05, "-", "mesh size on the crack / R", lo=1e-4, hi=1.0, kind=MESH)
 
 
 class _SneddonMonitor(Monitor):
@@ -232,13 +232,16 @@ class Sneddon(Scene):
 @dataclass(frozen=True)
 class ContactPatchParams:
     """Closed fracture across the domain under compression (contact_patch; verification.md section 5)"""
-    contact_dim: int = param(3, "-", "space dimension", choices=(2, 3))
-    contact_size: float = param(10.0, "m", "domain width and height", lo=0.0, lo_open=True)
+    contact_dim: int = param(3, "-", "space dimension", choices=(2, 3), kind=MESH)
+    contact_size: float = param(10.0, "m", "domain width and height", lo=0.0, lo_open=True, kind=MESH)
     contact_insitu_fraction: float = param(0.5, "-", "fraction of sigma and p present at t = 0; the rest "
-                                           "is ramped up over the run", lo=0.0, hi=1.0, lo_open=True)
+                                           "is ramped up over the run", lo=0.0, hi=1.0, lo_open=True,
+                                           kind=PHYSICS)
 
 
 class _ContactPatchMonitor(Monitor):
+    carried = ("worst",)
+
     def __init__(self, scene, law):
         self.scene, self.law = scene, law
         self.worst, self.last = {}, {}

@@ -31,7 +31,7 @@ from ..errors import InputError
 from ..kernels import poroelastic as pe
 from ..manufactured import HALVES, Amplitudes, Coefficients, CoupledSolution
 from ..model import FRACTURE, MATRIX, CellResidual, Side, Trace
-from ..params import param
+from ..params import DISCRETISATION, MESH, PHYSICS, param
 from ..recipes import flow_heat_first_recipe
 from .base import Monitor, Scene, Setup, TimeDefaults, face, on_sides, register
 from .contact import contact_block_recipe, contact_solver_defaults
@@ -43,11 +43,13 @@ FRACTURE_FIELDS = ("pf", "Tf")
 @dataclass(frozen=True)
 class CoupledMMSParams:
     """The full coupled manufactured solution (coupled_mms; verification.md section 8)"""
-    coupled_mms_dim: int = param(2, "-", "space dimension", choices=(2, 3))
+    coupled_mms_dim: int = param(2, "-", "space dimension", choices=(2, 3), kind=MESH)
     coupled_mms_state: str = param("open", "-", "the fracture: open (lam = 0, a = a0 + opening) or closed "
-                                   "(u continuous, lam > 0, a = a0 - lam/Kn)", choices=("open", "closed"))
+                                   "(u continuous, lam > 0, a = a0 - lam/Kn)", choices=("open", "closed"),
+                                   kind=PHYSICS)
     coupled_mms_supg: bool = param(True, "-", "SUPG in both heat equations, as every scene uses it (off: "
-                                   "the Galerkin form, to separate the stabilisation's consistency error)")
+                                   "the Galerkin form, to separate the stabilisation's consistency error)",
+                                   kind=DISCRETISATION)
 
 
 def coefficients(p, dim: int) -> Coefficients:

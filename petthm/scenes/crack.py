@@ -22,7 +22,7 @@ from ..errors import InputError
 from ..kernels import contact as ct
 from ..model import FRACTURE
 from ..monitors import fracture_vertices
-from ..params import param, with_defaults
+from ..params import MESH, PHYSICS, param, with_defaults
 from ..recipes import SSLS_CRACK_GAMG, glued
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
 from .contact import (OPEN_TRACTION, contact_solver_defaults, crack_half_model, fracture_normal,
@@ -33,12 +33,14 @@ from .contact import (OPEN_TRACTION, contact_solver_defaults, crack_half_model, 
 @dataclass(frozen=True)
 class PartialOpeningParams:
     """Crack under compression with a pressurised centre (partial_opening)"""
-    partial_half_length: float = param(50.0, "m", "crack half-length c (2D half model)", lo=0.0, lo_open=True)
-    partial_peak_pressure: float = param(12e6, "Pa", "pressure reached at the end in |x| < b (> sigma_n)")
+    partial_half_length: float = param(50.0, "m", "crack half-length c (2D half model)", lo=0.0, lo_open=True,
+                                       kind=MESH)
+    partial_peak_pressure: float = param(12e6, "Pa", "pressure reached at the end in |x| < b (> sigma_n)",
+                                         kind=PHYSICS)
     partial_radius: float = param(0.5, "-", "b / c: half-width of the pressurised centre", lo=0.0, hi=1.0,
-                                  lo_open=True)
-    partial_box: float = param(20.0, "-", "domain half-size / c", lo=2.0)
-    partial_crack_size: float = param(0.025, "-", "mesh size on the crack / c", lo=1e-4, hi=1.0)
+                                  lo_open=True, kind=PHYSICS)
+    partial_box: float = param(20.0, "-", "domain half-size / c", lo=2.0, kind=MESH)
+    partial_crack_size: float = param(0.025, "-", "mesh size on the crack / c", lo=1e-4, hi=1.0, kind=MESH)
 
 
 #: in-situ normal stress sigma_n and initial fluid pressure p0 (< sigma_n, kept outside |x| < b)
@@ -146,7 +148,10 @@ class PartialOpening(_CrackScene):
 # -- fracture_inflation --------------------------------------------------------------------
 class _InflationMonitor(_ProfileMonitor):
     """Injection pressure, centre opening, open vertices and the volume
-    balance: int a over the crack against the injected volume."""
+    balance: int a over the crack against the injected volume (relative to
+    it; with none, Q = 0, relative to the crack's initial fluid volume)."""
+
+    carried = ("a0",)
 
     def __init__(self, scene, mech, law):
         super().__init__(scene)
@@ -168,14 +173,15 @@ class _InflationMonitor(_ProfileMonitor):
         if self.a0 is None:
             self.a0 = vol
         injected = self.scene.p.injection_rate * t
+        ref = injected if injected > 0 else self.a0
         out = {"injection_pressure": probes.point_value(problem, "pf", (0.0, 0.0), X, t),
                "opening_centre": out["opening_centre"], "nodes_open": out["nodes_open"],
-               "volume_balance": (vol - self.a0 - injected) / injected if t > 0 else 0.0}
+               "volume_balance": (vol - self.a0 - injected) / ref if t > 0 else 0.0}
         self.last = dict(self.last, **out)
         return out
 
     def report(self, problem, t):
-        return dict(self.last)
+        return dict(self.last, error={"volume_balance": self.last.get("volume_balance")})
 
 
 @register

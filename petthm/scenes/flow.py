@@ -23,23 +23,27 @@ from ..constraints import Dirichlet
 from ..fracture import FRACTURE_BC, TIP_BC
 from ..model import MATRIX, Domain
 from ..monitors import FractureWells, Worst, hit
-from ..params import param
+from ..params import MESH, PHYSICS, param
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
-from .fractured import balances_of, far_sides, rigid_fracture_physics, strip_with_fracture
+from .fractured import (balances_of, far_sides, rate_pressure_scale, rigid_fracture_physics,
+                        strip_with_fracture)
 
 
 # -- fracture_flow_patch ------------------------------------------------------------------
 @dataclass(frozen=True)
 class PatchParams:
     """Linear pressure along a fracture cutting the domain (fracture_flow_patch)"""
-    patch_dim: int = param(2, "-", "space dimension", choices=(2, 3))
-    patch_length: float = param(100.0, "m", "fracture length (domain length in x)", lo=0.0, lo_open=True)
-    patch_inlet_pressure: float = param(1.2e5, "Pa", "pressure at x = 0")
-    patch_outlet_pressure: float = param(0.0, "Pa", "pressure at x = L")
+    patch_dim: int = param(2, "-", "space dimension", choices=(2, 3), kind=MESH)
+    patch_length: float = param(100.0, "m", "fracture length (domain length in x)", lo=0.0, lo_open=True,
+                                kind=MESH)
+    patch_inlet_pressure: float = param(1.2e5, "Pa", "pressure at x = 0", kind=PHYSICS)
+    patch_outlet_pressure: float = param(0.0, "Pa", "pressure at x = L", kind=PHYSICS)
 
 
 class _PatchMonitor(Monitor):
+    carried = ("worst",)
+
     def __init__(self, scene, flow, balances, worst):
         self.scene, self.flow, self.balances, self.worst = scene, flow, balances, worst
         self.last = (None, None)
@@ -115,18 +119,22 @@ class FractureFlowPatch(Scene):
 @dataclass(frozen=True)
 class RadialParams:
     """Point injector at the centre of a disc fracture, pressure fixed on the rim (radial_flow)"""
-    radial_radius: float = param(100.0, "m", "disc radius R", lo=0.0, lo_open=True)
-    radial_well_size: float = param(1.0, "m", "mesh size at the well", lo=0.0, lo_open=True)
-    radial_rim_pressure: float = param(0.0, "Pa", "pressure p_R on the rim")
+    radial_radius: float = param(100.0, "m", "disc radius R", lo=0.0, lo_open=True, kind=MESH)
+    radial_well_size: float = param(1.0, "m", "mesh size at the well", lo=0.0, lo_open=True, kind=MESH)
+    radial_rim_pressure: float = param(0.0, "Pa", "pressure p_R on the rim", kind=PHYSICS)
 
 
 class _RadialMonitor(Monitor):
+    carried = ("worst",)
+
     def __init__(self, scene, balances, worst):
         self.scene, self.balances, self.worst = scene, balances, worst
 
     def error(self, problem, t, X=None):
         """Max |p - p_exact| over fracture nodes at r >= 5 h_well, relative to
-        the largest pressure rise p_exact - p_R among them (verification.md 3b)."""
+        the largest pressure rise p_exact - p_R among them (verification.md 3b);
+        with no rise (Q = 0, a shut-in: p_exact = p_R) relative to the
+        pressure scale instead."""
         p, sc = self.scene.p, self.scene
         comm = problem.dm.comm
         v = problem.field_values("pf", X, t)[:, 0]
@@ -136,7 +144,7 @@ class _RadialMonitor(Monitor):
         ex = sc.exact(x[sel])
         e = probes.global_max(comm, np.abs(v[sel] - ex), empty=0.0)
         rise = probes.global_max(comm, ex - p.radial_rim_pressure, empty=0.0)
-        return e / rise
+        return e / rise if rise > 0 else e / sc.pressure_scale()
 
     def __call__(self, problem, t, X=None):
         out = {"injection_pressure": probes.point_value(problem, "pf", tuple(self.scene.centre()), X, t),
@@ -178,6 +186,13 @@ class RadialFlow(Scene):
         return p.radial_rim_pressure + p.injection_rate / (2 * np.pi * Th) * np.log(p.radial_radius /
                                                                                     np.maximum(r, 1e-300))
 
+    def pressure_scale(self) -> float:
+        """The rise p_exact - p_R at r = R/100 (Pa), or at Q = 0 the fallback
+        of ``rate_pressure_scale``."""
+        p, rim = self.p, self.p.radial_rim_pressure
+        ref = float(self.exact(self.centre()[None, :] + [[p.radial_radius / 100, 0, 0]])[0]) - rim
+        return rate_pressure_scale(ref, rim)
+
     def build(self, mesh, degree):
         p = self.p
         b = ModelBuilder(p, mesh.dim)
@@ -187,9 +202,7 @@ class RadialFlow(Scene):
         worst = Worst()
         monitor = _RadialMonitor(self, balances_of(b, p.fracture_aperture, 0.0, False, worst), worst)
         bcs = [Dirichlet("pf", TIP_BC, constant_in_time(p.radial_rim_pressure))]
-        ref = float(self.exact(self.centre()[None,
-                                             :] + [[p.radial_radius / 100, 0, 0]])[0]) - p.radial_rim_pressure
-        scales = {"pf": FieldScale(ref, p.radial_rim_pressure)}
+        scales = {"pf": FieldScale(self.pressure_scale(), p.radial_rim_pressure)}
         return Setup(b.build(), bcs, scales, {"pf": constant(p.radial_rim_pressure)}, monitor)
 
     solver_defaults = staticmethod(direct_solver_defaults)
@@ -199,17 +212,22 @@ class RadialFlow(Scene):
 @dataclass(frozen=True)
 class LeakoffParams:
     """Fracture pressure step, 1D diffusion into the matrix on both sides (leakoff_1d)"""
-    leakoff_length: float = param(10.0, "m", "fracture length (domain length in x)", lo=0.0, lo_open=True)
-    leakoff_width: float = param(60.0, "m", "matrix on each side of the fracture", lo=0.0, lo_open=True)
+    leakoff_length: float = param(10.0, "m", "fracture length (domain length in x)", lo=0.0, lo_open=True,
+                                  kind=MESH)
+    leakoff_width: float = param(60.0, "m", "matrix on each side of the fracture", lo=0.0, lo_open=True,
+                                 kind=MESH)
     leakoff_pressure_step: float = param(1e6, "Pa", "fracture overpressure dp for t > 0", lo=0.0,
-                                         lo_open=True)
-    leakoff_storage: float = param(1e-9, "1/Pa", "matrix storage S", lo=0.0, lo_open=True)
-    leakoff_fracture_size: float = param(0.05, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+                                         lo_open=True, kind=PHYSICS)
+    leakoff_storage: float = param(1e-9, "1/Pa", "matrix storage S", lo=0.0, lo_open=True, kind=PHYSICS)
+    leakoff_fracture_size: float = param(0.05, "m", "mesh size at the fracture", lo=0.0, lo_open=True,
+                                         kind=MESH)
 
 
 class _LeakoffMonitor(Monitor):
     """Leakoff rate = inflow through the fracture's pressure condition (the
     consistent reaction); volume = its backward-Euler time integral."""
+
+    carried = ("worst", "cumulative", "samples")
 
     def __init__(self, scene, balances, worst):
         self.scene, self.balances, self.worst = scene, balances, worst

@@ -20,7 +20,7 @@ from .. import materials as mt
 from .. import meshing
 from ..builders import ModelBuilder
 from ..monitors import Balances, FractureWells, TemperatureRange, Worst, fracture_balances
-from ..params import CELSIUS, param
+from ..params import CELSIUS, MESH, param
 from ..errors import InputError
 from .base import Monitor
 
@@ -75,7 +75,7 @@ def first_layer_param(option: str, default: float, mesh: str, when: str):
     return param(default, "m", f"first rock layer on each side of the fracture (0: {mesh}); a layered mesh "
                  f"grows from it by -{option}_growth; ~0.5 sqrt(kappa t) resolves the rock's thermal layer "
                  f"from time t on; auto: {AUTO_LAYER_FRACTION:g} sqrt(kappa t) at {when}",
-                 parse=first_layer_option(option))
+                 parse=first_layer_option(option), kind=MESH)
 
 
 def first_layer(scene, value: FirstLayer) -> float:
@@ -89,9 +89,10 @@ def first_layer(scene, value: FirstLayer) -> float:
     return thickness
 
 
-#: the wells and initial state of the Scene 1 family (injector, producer, rock at 100 degC)
+#: the wells and initial state of the Scene 1 family (injector, producer, rock at 100 degC; water at
+#: 1 MPa gauge, liquid at 100 degC, produced at the initial pressure)
 SCENE1_WELLS = mt.group("Wells and initial state", mt.WELLS + ("initial_temperature", "initial_pressure"),
-                        initial_temperature=100.0)
+                        initial_temperature=100.0, initial_pressure=1e6, production_pressure=1e6)
 
 
 def rigid_fracture_physics(b: ModelBuilder, degree: int, *, heat: bool, permeability=None,
@@ -146,6 +147,28 @@ def transmissivity(p, aperture: float, T: float) -> float:
     return float(aperture ** 3 / (12 * p.fluid_viscosity.mu(T)))
 
 
+#: the pressure scale of a shut-in whose own pressures are all 0 (gauge) (Pa)
+SHUT_IN_PRESSURE_SCALE = 1e6
+
+
+def rate_pressure_scale(dp: float, *pressures: float) -> float:
+    """The scale of a pressure unknown driven by an injection rate: ``dp``,
+    the pressure change the scene computes from the rate (Pa), when it is
+    positive (returned as it is: the results of a nonzero rate do not move).
+
+    A zero rate (a shut-in; ``-thm_injection_rate``'s range allows it) gives
+    dp = 0, and a zero scale would make x_hat = (x - offset) / scale NaN.
+    With no flow the pressures stay at their initial state, and any
+    positive scale works: the scale only sets the unknown's units (and its
+    residual rows' reference).  The fallback is a size from the scene's own
+    ``pressures`` (its initial, production or boundary pressures): the
+    largest magnitude among them, or ``SHUT_IN_PRESSURE_SCALE`` (1 MPa) where
+    they are all 0 (gauge)."""
+    if dp > 0:
+        return dp
+    return max((abs(float(x)) for x in pressures), default=0.0) or SHUT_IN_PRESSURE_SCALE
+
+
 def balances_of(b: ModelBuilder, reference_aperture: float, p0: float, heat: bool, worst: Worst) -> Balances:
     """The fluid volume (and energy) balances of a fracture model (stored
     amounts relative to p0 and T0)."""
@@ -167,6 +190,8 @@ def strip_with_fracture(path, length, width, size, fracture_size):
 
 class WellsMonitor(Monitor):
     """Well histories, balances and (with heat) Tf's range against [Tinj, T0]."""
+
+    carried = ("worst",)
 
     def __init__(self, wells: FractureWells | None, balances: Balances, worst: Worst,
                  tf_range: TemperatureRange | None = None):
@@ -194,5 +219,5 @@ def heat_wells_monitor(b: ModelBuilder, wells, reference_aperture: float | None 
                         tf_range(p, worst, warn_above, hint))
 
 
-__all__ = ["rigid_fracture_physics", "transmissivity", "balances_of", "far_sides", "strip_with_fracture",
-           "WellsMonitor", "tf_range", "CELSIUS"]
+__all__ = ["rigid_fracture_physics", "transmissivity", "rate_pressure_scale", "balances_of", "far_sides",
+           "strip_with_fracture", "WellsMonitor", "tf_range", "CELSIUS"]

@@ -39,7 +39,7 @@ from ..errors import InputError
 from ..kernels import poroelastic as pe
 from ..kernels.friction import tangent_basis
 from ..monitors import contact_node_fields
-from ..params import param
+from ..params import MESH, PHYSICS, param
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions
 from .contact import contact_solver_defaults, fracture_normal, mechanics_model
 
@@ -47,10 +47,10 @@ from .contact import contact_solver_defaults, fracture_normal, mechanics_model
 @dataclass(frozen=True)
 class FrictionPatchParams:
     """Sheared fracture across the domain (friction_patch)"""
-    friction_dim: int = param(2, "-", "space dimension", choices=(2, 3))
-    friction_size: float = param(10.0, "m", "domain width and height H", lo=0.0, lo_open=True)
+    friction_dim: int = param(2, "-", "space dimension", choices=(2, 3), kind=MESH)
+    friction_size: float = param(10.0, "m", "domain width and height H", lo=0.0, lo_open=True, kind=MESH)
     friction_shear_ratio: float = param(2.0, "-", "final G delta / (H b), b = c0 + mu_f sigma: < 1 stick, "
-                                        "> 1 slip", lo=0.0)
+                                        "> 1 slip", lo=0.0, kind=PHYSICS)
 
 
 def slip_columns(problem, X=None, t: float = 0.0, fields: dict | None = None) -> dict:
@@ -77,6 +77,8 @@ class _CoulombScene(Scene):
 
 
 class _FrictionPatchMonitor(Monitor):
+    carried = ("worst",)
+
     def __init__(self, scene):
         self.scene = scene
         self.worst, self.last = {}, {}
@@ -201,15 +203,15 @@ class FrictionPatch(_CoulombScene):
 class InclinedCrackParams:
     """Frictional crack inclined in a uniaxial compression (inclined_crack)"""
     inclined_dim: int = param(2, "-", "2: plane-strain crack; 3: penny crack (half model x >= 0)",
-                              choices=(2, 3))
+                              choices=(2, 3), kind=MESH)
     inclined_half_length: float = param(1.0, "m", "crack half-length (2D) or radius (3D) a", lo=0.0,
-                                        lo_open=True)
+                                        lo_open=True, kind=MESH)
     inclined_angle: float = param(45.0, "deg", "angle psi of the crack to the plane normal to the load",
-                                  lo=0.0, hi=90.0, lo_open=True)
+                                  lo=0.0, hi=90.0, lo_open=True, kind=MESH)
     inclined_compression: float = param(10e6, "Pa", "uniaxial compression sigma along the last axis",
-                                        lo=0.0, lo_open=True)
-    inclined_box: float = param(20.0, "-", "domain half-size L / a", lo=2.0)
-    inclined_crack_size: float = param(0.05, "-", "mesh size on the crack / a", lo=1e-4, hi=1.0)
+                                        lo=0.0, lo_open=True, kind=PHYSICS)
+    inclined_box: float = param(20.0, "-", "domain half-size L / a", lo=2.0, kind=MESH)
+    inclined_crack_size: float = param(0.05, "-", "mesh size on the crack / a", lo=1e-4, hi=1.0, kind=MESH)
 
 
 class _InclinedCrackMonitor(Monitor):
@@ -252,7 +254,8 @@ class _InclinedCrackMonitor(Monitor):
         return self.last
 
     def report(self, problem, t):
-        return dict(self.last, profile=self.profile)
+        return dict(self.last, profile=self.profile,
+                    error={k: self.last.get(k) for k in ("slip_l2_error", "lam_error", "law_error")})
 
 
 @register

@@ -28,7 +28,7 @@ from ..builders import ModelBuilder
 from ..constraints import Dirichlet
 from ..kernels import heat as hk
 from ..model import MATRIX
-from ..params import CELSIUS, param
+from ..params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, face, register
 
@@ -40,10 +40,12 @@ ROCK_AND_FLUID_HEAT = mt.ROCK_HEAT + ("rock_porosity",) + mt.FLUID_HEAT
 @dataclass(frozen=True)
 class MMSParams:
     """Manufactured-solution set-up (heat_mms)"""
-    mms_dim: int = param(2, "-", "space dimension", choices=(2, 3))
-    mms_velocity: tuple = param((1.0, 0.5, 0.25), "m/s", "uniform Darcy velocity vx,vy[,vz]")
-    mms_robin_coefficient: float = param(2.0, "W/(m2 K)", "h of the Robin side y=1", lo=0.0, lo_open=True)
-    mms_amplitude: float = param(10.0, "K", "amplitude A of the manufactured field", lo=0.0, lo_open=True)
+    mms_dim: int = param(2, "-", "space dimension", choices=(2, 3), kind=MESH)
+    mms_velocity: tuple = param((1.0, 0.5, 0.25), "m/s", "uniform Darcy velocity vx,vy[,vz]", kind=PHYSICS)
+    mms_robin_coefficient: float = param(2.0, "W/(m2 K)", "h of the Robin side y=1", lo=0.0, lo_open=True,
+                                         kind=PHYSICS)
+    mms_amplitude: float = param(10.0, "K", "amplitude A of the manufactured field", lo=0.0, lo_open=True,
+                                 kind=PHYSICS)
 
 
 class _ErrorNorms(Monitor):
@@ -154,9 +156,9 @@ class HeatMMS(Scene):
 class ErfcParams:
     """Half-space conduction after a surface temperature step (heat_erfc)"""
     erfc_depth: float = param(10.0, "m", "depth of the strip (insulated at the far end)", lo=0.0,
-                              lo_open=True)
-    erfc_width: float = param(0.5, "m", "width of the strip", lo=0.0, lo_open=True)
-    erfc_surface_size: float = param(0.02, "m", "mesh size at the surface", lo=0.0, lo_open=True)
+                              lo_open=True, kind=MESH)
+    erfc_width: float = param(0.5, "m", "width of the strip", lo=0.0, lo_open=True, kind=MESH)
+    erfc_surface_size: float = param(0.02, "m", "mesh size at the surface", lo=0.0, lo_open=True, kind=MESH)
 
 
 class _ErfcMonitor(Monitor):
@@ -186,6 +188,7 @@ class HeatErfc(Scene):
     name = "heat_erfc"
     dimension = 2
     description = "1D transient conduction into a half-space (verification.md 7a), graded mesh"
+    water_pressure = 1e6                # Pa gauge (no pressure field; liquid up to 184 degC)
     parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT),
                   mt.group("Initial and surface temperature", ("initial_temperature", "surface_temperature")),
                   ErfcParams)
@@ -227,14 +230,17 @@ class HeatErfc(Scene):
 class AdvectionParams:
     """Advection-dominated front in a channel (heat_advection)"""
     advection_velocity: tuple = param((1e-5, 0.0), "m/s",
-                                      "uniform Darcy velocity vx,vy (inflow only through x = 0)")
-    advection_length: float = param(100.0, "m", "channel length", lo=0.0, lo_open=True)
-    advection_height: float = param(20.0, "m", "channel height", lo=0.0, lo_open=True)
-    supg: bool = param(True, "-", "SUPG stabilisation")
+                                      "uniform Darcy velocity vx,vy (inflow only through x = 0)",
+                                      kind=PHYSICS)
+    advection_length: float = param(100.0, "m", "channel length", lo=0.0, lo_open=True, kind=MESH)
+    advection_height: float = param(20.0, "m", "channel height", lo=0.0, lo_open=True, kind=MESH)
+    supg: bool = param(True, "-", "SUPG stabilisation", kind=DISCRETISATION)
 
 
 class _ExtremesMonitor(Monitor):
     """T_min, T_max and the overshoot every step, and their extremes over the run."""
+
+    carried = ("extremes",)
 
     def __init__(self, scene):
         self.scene = scene
@@ -250,7 +256,8 @@ class _ExtremesMonitor(Monitor):
 
     def report(self, problem, t):
         tmin, tmax = self.extremes
-        return {"overshoot_rel": max(tmax - self.hi, self.lo - tmin, 0.0) / (self.hi - self.lo),
+        over = max(tmax - self.hi, self.lo - tmin, 0.0) / (self.hi - self.lo)
+        return {"overshoot_rel": over, "error": {"overshoot_rel": over},
                 "T_min_all_steps": tmin, "T_max_all_steps": tmax,
                 "cell_peclet_min": self.scene.cell_peclet(problem.disc.mesh)}
 
@@ -260,6 +267,7 @@ class HeatAdvection(Scene):
     name = "heat_advection"
     dimension = 2
     description = "cold front advected at cell Peclet >= 100 (SUPG boundedness check)"
+    water_pressure = 1e6                # Pa gauge: liquid at the 100 degC start
     parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT, rock_conductivity=0.1,
                            fluid_conductivity=0.0),
                   mt.group("Temperatures", ("initial_temperature", "injection_temperature"),

@@ -18,32 +18,36 @@ from ..constraints import Dirichlet
 from ..errors import InputError
 from ..kernels import wells as wl
 from ..monitors import FractureWells, hit
-from ..params import CELSIUS, param
+from ..params import CELSIUS, MESH, PHYSICS, param
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
 from .fractured import (SCENE1_WELLS, FirstLayer, WellsMonitor, far_sides, first_layer, first_layer_param,
-                        heat_wells_monitor, rigid_fracture_physics, strip_with_fracture, transmissivity)
+                        heat_wells_monitor, rate_pressure_scale, rigid_fracture_physics, strip_with_fracture,
+                        transmissivity)
 
 
 @dataclass(frozen=True)
 class LauwerierParams:
     """Fracture in impermeable hot rock (lauwerier; verification.md section 1)"""
     lauwerier_length: float = param(100.0, "m", "fracture length L (injector at x = 0, producer at x = L)",
-                                    lo=0.0, lo_open=True)
+                                    lo=0.0, lo_open=True, kind=MESH)
     lauwerier_width: float = param(0.0, "m", "rock on each side of the fracture (0: the larger of 60 m "
                                    "and 4 sqrt(kappa t_final); a width below 4 sqrt(kappa t_final), where "
-                                   "the rock's far side would feel the cooling, is refused)", lo=0.0)
-    lauwerier_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+                                   "the rock's far side would feel the cooling, is refused)", lo=0.0,
+                                   kind=MESH)
+    lauwerier_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True,
+                                           kind=MESH)
     lauwerier_layer: FirstLayer = first_layer_param("thm_lauwerier_layer", 0.0, "a graded unstructured mesh",
                                                     "the start of the outlet error's range (1e4 s)")
-    lauwerier_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
+    lauwerier_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0,
+                                          kind=MESH)
     lauwerier_dim: int = param(2, "-", "2: plane strain (H = 1 m); 3: a slab of height H with line wells",
-                               choices=(2, 3))
+                               choices=(2, 3), kind=MESH)
     lauwerier_height: float = param(1.0, "m", "slab height H (3D; Q is the slab's total rate)",
-                                    lo=0.0, lo_open=True)
+                                    lo=0.0, lo_open=True, kind=MESH)
     lauwerier_rock_conduction: str = param("full", "-", "full, or normal: conduction in the rock only "
                                            "normal to the fracture (the analytical solution's assumption)",
-                                           choices=("full", "normal"))
+                                           choices=("full", "normal"), kind=PHYSICS)
 
 
 #: the rock of Scene 1 (physics.md section 11)
@@ -113,8 +117,10 @@ class SlabWells:
             qs.append(term.residual(v, t)["pf"])
             Ts.append(v["Tf"])
         qs, Ts = np.array(qs), np.array(Ts)
+        # the produced water's mixed temperature; with nothing produced (t = 0, a shut-in) the line's mean
+        Tp = np.dot(qs, Ts) / qs.sum() if qs.sum() > 0 else np.dot(wp, Ts) / wp.sum()
         return {"injection_pressure": float(np.dot(pin, wi) / wi.sum()), "production_rate": float(qs.sum()),
-                "production_temperature": float(np.dot(qs, Ts) / qs.sum()) - CELSIUS}
+                "production_temperature": float(Tp) - CELSIUS}
 
 
 #: the outlet error is reported as its maximum from each of these times on (s):
@@ -126,6 +132,8 @@ OUTLET_ERROR_FROM = (1e4, 1e6)
 class _LauwerierMonitor(Monitor):
     """Outlet error every step (its maximum over t >= 1e4 s and over
     t >= 1e6 s), the profile error at the profile times, Tf's range, balances."""
+
+    carried = ("base.worst", "outlet", "profile", "steps_scored")
 
     def __init__(self, scene, base: WellsMonitor):
         self.scene, self.base = scene, base
@@ -251,7 +259,8 @@ class Lauwerier(Scene):
         bcs = [Dirichlet("Tm", "far", constant_in_time(T0))]
         Th = p.fracture_aperture ** 3 / 12 / p.fluid_viscosity.mu(Ti)
         Th = Th * p.lauwerier_height if p.lauwerier_dim == 3 else Th
-        dp = float(p.injection_rate * p.lauwerier_length / Th)
+        dp = rate_pressure_scale(float(p.injection_rate * p.lauwerier_length / Th), p.initial_pressure,
+                                 p.production_pressure)
         sT = FieldScale(abs(T0 - Ti) or 1.0, T0)
         scales = {"pf": FieldScale(dp, p.production_pressure), "Tf": sT,
                   "Tm": FieldScale(sT.scale, sT.offset)}

@@ -21,7 +21,7 @@ from ..constraints import Dirichlet
 from ..kernels import poroelastic as pe
 from ..model import MATRIX
 from ..monitors import hit
-from ..params import CELSIUS, param
+from ..params import CELSIUS, MESH, param
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, zero
 
@@ -30,8 +30,8 @@ from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_tim
 @dataclass(frozen=True)
 class GravityParams:
     """Elastic column under its own weight (gravity_column)"""
-    gravity_height: float = param(100.0, "m", "column height H", lo=0.0, lo_open=True)
-    gravity_width: float = param(10.0, "m", "column width", lo=0.0, lo_open=True)
+    gravity_height: float = param(100.0, "m", "column height H", lo=0.0, lo_open=True, kind=MESH)
+    gravity_width: float = param(10.0, "m", "column width", lo=0.0, lo_open=True, kind=MESH)
 
 
 class _GravityMonitor(Monitor):
@@ -95,12 +95,14 @@ class GravityColumn(Scene):
 class ThermalStressParams:
     """Cooling of a laterally constrained half-space (thermal_stress; verification.md 7b)"""
     thermal_depth: float = param(60.0, "m", "depth of the column (> 4 sqrt(kappa t_final))", lo=0.0,
-                                 lo_open=True)
-    thermal_width: float = param(1.0, "m", "width of the column", lo=0.0, lo_open=True)
-    thermal_surface_size: float = param(0.1, "m", "mesh size at the surface", lo=0.0, lo_open=True)
+                                 lo_open=True, kind=MESH)
+    thermal_width: float = param(1.0, "m", "width of the column", lo=0.0, lo_open=True, kind=MESH)
+    thermal_surface_size: float = param(0.1, "m", "mesh size at the surface", lo=0.0, lo_open=True, kind=MESH)
 
 
 class _ThermalStressMonitor(Monitor):
+    carried = ("errors",)
+
     def __init__(self, scene, elastic):
         self.scene, self.elastic = scene, elastic
         self.errors = {}

@@ -22,7 +22,7 @@ from ..constraints import Dirichlet
 from ..kernels import poroelastic as pe
 from ..model import MATRIX
 from ..monitors import hit
-from ..params import param
+from ..params import DISCRETISATION, MESH, PHYSICS, param
 from ..recipes import PMG_P1_NOT_AGGRESSIVE, glued
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, register, zero
@@ -68,17 +68,19 @@ def biot_model(p, mesh, degree: int, pressure_degree: int, stabilisation: float 
 @dataclass(frozen=True)
 class TerzaghiParams:
     """Terzaghi consolidation column (terzaghi)"""
-    terzaghi_height: float = param(10.0, "m", "column height L", lo=0.0, lo_open=True)
-    terzaghi_width: float = param(1.0, "m", "column width", lo=0.0, lo_open=True)
+    terzaghi_height: float = param(10.0, "m", "column height L", lo=0.0, lo_open=True, kind=MESH)
+    terzaghi_width: float = param(1.0, "m", "column width", lo=0.0, lo_open=True, kind=MESH)
     terzaghi_dim: int = param(2, "-", "space dimension (3: a square column, rollers on its four sides)",
-                              choices=(2, 3))
-    terzaghi_load: float = param(1e6, "Pa", "compressive load sigma0 on the top", lo=0.0, lo_open=True)
-    terzaghi_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2))
+                              choices=(2, 3), kind=MESH)
+    terzaghi_load: float = param(1e6, "Pa", "compressive load sigma0 on the top", lo=0.0, lo_open=True,
+                                 kind=PHYSICS)
+    terzaghi_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2),
+                                          kind=DISCRETISATION)
     biot_stabilization: float = param(0.0, "-", "factor of the pressure stabilisation h^2/(4(lambda+2G)) "
-                                      "(0: off; 1: Aguilar et al. 2008)", lo=0.0)
+                                      "(0: off; 1: Aguilar et al. 2008)", lo=0.0, kind=DISCRETISATION)
     terzaghi_start: str = param("undrained", "-", "initial state: undrained (the t = 0+ solution) or rest "
                                 "(u = 0, p = 0; the load makes the first step undrained)",
-                                choices=("undrained", "rest"))
+                                choices=("undrained", "rest"), kind=PHYSICS)
 
 
 def _terms(n=400):
@@ -89,6 +91,8 @@ class _TerzaghiMonitor(Monitor):
     """Settlement and base pressure every step; the relative L2 error of pm at
     the verification times T_v = c t / L^2 (the series is costly); the
     largest pressure outside [0, p0]."""
+
+    carried = ("errors", "overshoot")
 
     def __init__(self, scene):
         self.scene = scene
@@ -229,16 +233,21 @@ class Terzaghi(Scene):
 @dataclass(frozen=True)
 class MandelParams:
     """Mandel's problem, quarter domain (mandel; verification.md 6b)"""
-    mandel_a: float = param(10.0, "m", "half-width a (drained sides at x = +-a)", lo=0.0, lo_open=True)
-    mandel_b: float = param(10.0, "m", "half-height b (rigid plates at y = +-b)", lo=0.0, lo_open=True)
+    mandel_a: float = param(10.0, "m", "half-width a (drained sides at x = +-a)", lo=0.0, lo_open=True,
+                            kind=MESH)
+    mandel_b: float = param(10.0, "m", "half-height b (rigid plates at y = +-b)", lo=0.0, lo_open=True,
+                            kind=MESH)
     mandel_force: float = param(1e7, "N/m", "force F per unit length on each plate (mean stress F/a)",
-                                lo=0.0, lo_open=True)
-    mandel_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2))
+                                lo=0.0, lo_open=True, kind=PHYSICS)
+    mandel_pressure_degree: int = param(1, "-", "degree of pm (1: Taylor-Hood with P2 u)", choices=(1, 2),
+                                        kind=DISCRETISATION)
 
 
 class _MandelMonitor(Monitor):
     """Centre pressure, its peak, the plate force (the consistent reaction),
     the largest nodal pressure error at the verification times."""
+
+    carried = ("errors", "peak", "force_error")
 
     def __init__(self, scene):
         self.scene = scene

@@ -22,12 +22,13 @@ from ..constraints import Dirichlet
 from ..errors import InputError
 from ..kernels import wells as wl
 from ..monitors import Balances, FractureWells, Worst, hit
-from ..params import CELSIUS, param
+from ..output import on_root
+from ..params import CELSIUS, MESH, PHYSICS, param
 from ..solver import direct_solver_defaults
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
 from .fractured import (SCENE1_WELLS, FirstLayer, WellsMonitor, balances_of, far_sides, first_layer,
-                        first_layer_param, heat_wells_monitor, rigid_fracture_physics, strip_with_fracture,
-                        transmissivity)
+                        first_layer_param, heat_wells_monitor, rate_pressure_scale, rigid_fracture_physics,
+                        strip_with_fracture, transmissivity)
 from .lauwerier import SCENE1_ROCK
 
 FRACTURE_HEAT = mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT)
@@ -38,17 +39,22 @@ FRACTURE_HEAT = mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT)
 class Scene1Params:
     """Scene 1 of the paper: rigid fracture in a permeable matrix (rigid_fracture)"""
     scene1_length: float = param(100.0, "m", "fracture length (injector at x = 0, producer at x = L)",
-                                 lo=0.0, lo_open=True)
+                                 lo=0.0, lo_open=True, kind=MESH)
     scene1_margin: float = param(150.0, "m", "rock beyond the fracture in every direction", lo=0.0,
-                                 lo_open=True)
-    scene1_fracture_size: float = param(1.0, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+                                 lo_open=True, kind=MESH)
+    scene1_fracture_size: float = param(1.0, "m", "mesh size at the fracture", lo=0.0, lo_open=True,
+                                        kind=MESH)
     scene1_layer: FirstLayer = first_layer_param("thm_scene1_layer", 0.0, "a graded unstructured mesh",
                                                  "the first output time (the profile at 1e8 s)")
-    scene1_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
+    scene1_layer_growth: float = param(1.3, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0,
+                                       kind=MESH)
 
 
 class _Scene1Monitor(Monitor):
     """Wells, leakoff fraction, Tf's range, balances; the Tf profile at 1e8 s."""
+
+    carried = ("base.worst", "profile")
+    files = ("profile_1e8.json",)
 
     def __init__(self, scene, base: WellsMonitor):
         self.scene, self.base = scene, base
@@ -74,8 +80,11 @@ class _Scene1Monitor(Monitor):
                "permeability": list(self.scene.p.rock_permeability)}
         if self.profile is not None:
             path = os.path.join(self.scene.output_dir, "profile_1e8.json")
-            with open(path, "w") as f:
-                json.dump(self.profile, f)
+
+            def write():
+                with open(path, "w") as f:
+                    json.dump(self.profile, f)
+            on_root(problem.dm.comm, write, path)
             out["profile_file"] = os.path.basename(path)
         return out
 
@@ -140,7 +149,7 @@ class RigidFracture(Scene):
         if K is not None:
             bcs.append(Dirichlet("pm", "far", constant_in_time(p0)))
         Th = p.fracture_aperture ** 3 / 12 / p.fluid_viscosity.mu(Ti)
-        dp = float(p.injection_rate * p.scene1_length / Th)
+        dp = rate_pressure_scale(float(p.injection_rate * p.scene1_length / Th), p0, p.production_pressure)
         sp, sT = FieldScale(dp, p.production_pressure), FieldScale(abs(T0 - Ti) or 1.0, T0)
         scales = {"pf": sp, "Tf": sT, "Tm": FieldScale(sT.scale, sT.offset)}
         init = {"pf": constant(p0), "Tf": constant(T0), "Tm": constant(T0)}
@@ -157,14 +166,17 @@ class RigidFracture(Scene):
 class LeakoffHeatParams:
     """Fracture heat transport with a uniform leakoff fraction m (leakoff_heat; verification.md 2)"""
     leakoff_fraction: float = param(0.25, "-", "fraction m of the injected rate lost over the fracture",
-                                    lo=0.0, hi=1.0, lo_open=True)
-    leakoff_heat_length: float = param(100.0, "m", "fracture length L", lo=0.0, lo_open=True)
+                                    lo=0.0, hi=1.0, lo_open=True, kind=PHYSICS)
+    leakoff_heat_length: float = param(100.0, "m", "fracture length L", lo=0.0, lo_open=True, kind=MESH)
     leakoff_heat_width: float = param(60.0, "m", "matrix on each side (pressure p_W there)", lo=0.0,
-                                      lo_open=True)
-    leakoff_heat_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True)
+                                      lo_open=True, kind=MESH)
+    leakoff_heat_fracture_size: float = param(0.5, "m", "mesh size at the fracture", lo=0.0, lo_open=True,
+                                              kind=MESH)
 
 
 class _LeakoffHeatMonitor(Monitor):
+    carried = ("worst", "errors")
+
     def __init__(self, scene, wells, balances: Balances, worst: Worst):
         self.scene, self.wells, self.balances, self.worst = scene, wells, balances, worst
         self.errors = {}
@@ -205,7 +217,7 @@ class LeakoffHeat(Scene):
                            fracture_aperture=3e-3),
                   mt.group("Wells and initial state", ("injection_rate", "injection_temperature",
                                                        "initial_temperature", "initial_pressure"),
-                           initial_temperature=100.0),
+                           initial_temperature=100.0, initial_pressure=1e6),
                   LeakoffHeatParams)
     time = TimeDefaults(final_time=1e8, dt_initial=100.0, dt_growth=1.03, dt_max=5e5, mesh_size=10.0,
                         output_interval=25)
@@ -261,7 +273,7 @@ class LeakoffHeat(Scene):
         pW, dp = p.initial_pressure, self.overpressure()
         W = p.leakoff_heat_width
         bcs = [Dirichlet("Tm", "far", constant_in_time(T0)), Dirichlet("pm", "far", constant_in_time(pW))]
-        sp, sT = FieldScale(dp, pW), FieldScale(abs(T0 - Ti), T0)
+        sp, sT = FieldScale(rate_pressure_scale(dp, pW), pW), FieldScale(abs(T0 - Ti), T0)
         scales = {"pf": sp, "pm": FieldScale(sp.scale, sp.offset), "Tf": sT,
                   "Tm": FieldScale(sT.scale, sT.offset)}
         steady = lambda x: pW + dp * (1 - np.abs(x[:, 1] - W) / W)  # noqa: E731

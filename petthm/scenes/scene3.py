@@ -35,7 +35,7 @@ from ..materials import Parameters
 from ..matrixwells import MatrixWells, Perforation
 from ..mesh import Interior
 from ..monitors import Worst, contact_node_checks, contact_node_fields
-from ..params import param
+from ..params import DISCRETISATION, MESH, PHYSICS, param
 from ..recipes import flow_heat_first_recipe
 from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
@@ -54,29 +54,33 @@ class Scene3Params:
     """Scene 3 of the paper: deformable inclined fracture, permeable rock, matrix wells (inclined_penny)"""
     scene3_case: int = param(1, "-", "the paper's case: 1 (T0 80 degC, 60 MPa), 2 (250 degC, 60 MPa), "
                              "3 (250 degC, 75 MPa); sets the defaults of -thm_initial_temperature and "
-                             "-thm_insitu_stress", choices=(1, 2, 3))
-    scene3_radius: float = param(200.0, "m", "fracture radius R", lo=0.0, lo_open=True)
-    scene3_dip: float = param(30.0, "deg", "fracture dip (rotation about the y axis)", lo=0.0, hi=80.0)
-    scene3_box: float = param(3.0, "-", "domain half-size / R", lo=1.5)
+                             "-thm_insitu_stress", choices=(1, 2, 3), kind=PHYSICS)
+    scene3_radius: float = param(200.0, "m", "fracture radius R", lo=0.0, lo_open=True, kind=MESH)
+    scene3_dip: float = param(30.0, "deg", "fracture dip (rotation about the y axis)", lo=0.0, hi=80.0,
+                              kind=MESH)
+    scene3_box: float = param(3.0, "-", "domain half-size / R", lo=1.5, kind=MESH)
     scene3_well_spacing: float = param(300.0, "m", "distance between the wells (on the strike line y "
                                        "through the fracture's centre, symmetric about it)", lo=0.0,
-                                       lo_open=True)
+                                       lo_open=True, kind=MESH)
     scene3_perforation: float = param(20.0, "m", "perforated length at the bottom of each well", lo=0.0,
-                                      lo_open=True)
+                                      lo_open=True, kind=MESH)
     scene3_well_standoff: float = param(10.0, "m", "vertical distance from the fracture up to the bottom "
                                         "of each perforation (the wells do not reach the fracture)",
-                                        lo=0.0, lo_open=True)
-    scene3_fracture_size: float = param(20.0, "m", "mesh size on the fracture", lo=0.0, lo_open=True)
-    scene3_well_size: float = param(5.0, "m", "mesh size along the perforations", lo=0.0, lo_open=True)
+                                        lo=0.0, lo_open=True, kind=MESH)
+    scene3_fracture_size: float = param(20.0, "m", "mesh size on the fracture", lo=0.0, lo_open=True,
+                                        kind=MESH)
+    scene3_well_size: float = param(5.0, "m", "mesh size along the perforations", lo=0.0, lo_open=True,
+                                    kind=MESH)
     scene3_layer: FirstLayer = first_layer_param("thm_scene3_layer", 0.0, "unstructured tetrahedra",
                                                  "the first output time (10 years)")
     scene3_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0,
-                                       lo_open=True)
+                                       lo_open=True, kind=MESH)
     scene3_far_pressure: str = param("fixed", "-", "the box faces: fixed (pm = p0, fluid crosses them) or "
                                      "closed (no flow: all the produced water comes from the rock and the "
-                                     "injector)", choices=("fixed", "closed"))
+                                     "injector)", choices=("fixed", "closed"), kind=PHYSICS)
     scene3_lumped_heat: bool = param(True, "-", "row-sum lumping of the heat capacities (keeps Tf and Tm "
-                                     "closer to [Tinj, T0] where the mesh does not resolve the fronts)")
+                                     "closer to [Tinj, T0] where the mesh does not resolve the fronts)",
+                                     kind=DISCRETISATION)
 
 
 WELLS3 = mt.group("Wells, in-situ and initial state", mt.WELLS + (
@@ -86,6 +90,8 @@ WELLS3 = mt.group("Wells, in-situ and initial state", mt.WELLS + (
 
 class _Scene3Monitor(Monitor):
     """Wells, the fracture's aperture, contact and temperature, balances."""
+
+    carried = ("worst", "peak")
 
     def __init__(self, scene, wells: MatrixWells, balances, worst, law, tf):
         self.scene, self.wells, self.balances, self.worst = scene, wells, balances, worst
@@ -345,7 +351,8 @@ class InclinedPenny(ClosedUnderStress, Scene):
         bcs += tip_tractions(model, constant_in_time(self.lam0))
         far = [f"{s}{c}" for c in "xyz" for s in ("lo_", "hi_")]
         bcs += [Dirichlet("Tm", f, constant_in_time(T0)) for f in far]
-        bcs.append(Dirichlet("Tm", "injector", constant_in_time(Ti)))
+        if p.injection_rate > 0:        # shut in (Q = 0), the injector holds no cold water: Tm stays free
+            bcs.append(Dirichlet("Tm", "injector", constant_in_time(Ti)))
         if p.scene3_far_pressure == "fixed":
             bcs += [Dirichlet("pm", f, constant_in_time(p0)) for f in far]
         sp, sT = FieldScale(self.pressure_scale(), p0), FieldScale(abs(T0 - Ti) or 1.0, T0)

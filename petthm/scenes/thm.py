@@ -30,32 +30,37 @@ from ..constraints import Dirichlet
 from ..errors import InputError
 from ..fields import Domain
 from ..monitors import FractureWells, contact_node_checks, fracture_vertices
-from ..params import CELSIUS, param
+from ..output import on_root
+from ..params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
 from ..recipes import closed_fracture_recipe
 from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
                    zero)
 from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal
 from .fractured import (ClosedUnderStress, FirstLayer, WellsMonitor, first_layer, first_layer_param,
-                        heat_wells_monitor, transmissivity)
+                        heat_wells_monitor, rate_pressure_scale, transmissivity)
 from .friction import slip_columns
 
 
 @dataclass(frozen=True)
 class Scene2Params:
     """Scene 2 of the paper: deformable penny fracture in impermeable rock (penny_impermeable)"""
-    scene2_radius: float = param(100.0, "m", "fracture radius R", lo=0.0, lo_open=True)
+    scene2_radius: float = param(100.0, "m", "fracture radius R", lo=0.0, lo_open=True, kind=MESH)
     scene2_well_offset: float = param(50.0, "m", "distance of each well from the centre (< R)", lo=0.0,
-                                      lo_open=True)
-    scene2_box: float = param(3.0, "-", "domain half-size / R (the rock beyond the fracture)", lo=1.5)
-    scene2_fracture_size: float = param(10.0, "m", "mesh size on the fracture", lo=0.0, lo_open=True)
-    scene2_well_size: float = param(5.0, "m", "mesh size at the wells", lo=0.0, lo_open=True)
+                                      lo_open=True, kind=MESH)
+    scene2_box: float = param(3.0, "-", "domain half-size / R (the rock beyond the fracture)", lo=1.5,
+                              kind=MESH)
+    scene2_fracture_size: float = param(10.0, "m", "mesh size on the fracture", lo=0.0, lo_open=True,
+                                        kind=MESH)
+    scene2_well_size: float = param(5.0, "m", "mesh size at the wells", lo=0.0, lo_open=True, kind=MESH)
     scene2_layer: FirstLayer = first_layer_param("thm_scene2_layer", 0.5, "unstructured tetrahedra",
                                                  "the first output time (1e3 s: 0.0185 m in granite)")
-    scene2_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0)
+    scene2_layer_growth: float = param(1.5, "-", "thickness ratio of successive layers", lo=1.0, hi=3.0,
+                                       kind=MESH)
     scene2_lumped_heat: bool = param(True, "-", "row-sum lumping of the rock heat capacity and the wall "
-                                     "exchange (keeps Tf and Tm within [Tinj, T0] on thin layers)")
+                                     "exchange (keeps Tf and Tm within [Tinj, T0] on thin layers)",
+                                     kind=DISCRETISATION)
     scene2_tip_traction: str = param("insitu", "-", "lam at the fracture front: insitu (its initial value) "
-                                     "or zero", choices=("insitu", "zero"))
+                                     "or zero", choices=("insitu", "zero"), kind=PHYSICS)
 
 
 #: a Tf more than this fraction of [Tinj, T0] outside it is reported as a warning
@@ -67,6 +72,9 @@ HALF = 0.5
 class _Scene2Monitor(Monitor):
     """Wells, contact and aperture at the injector, the aperture identity
     a = a0 - lam/Kn where closed, Tf's range, balances; the fracture maps."""
+
+    carried = ("base.worst",)
+    files = ("fracture_final.npz",)
 
     def __init__(self, scene, base: WellsMonitor, law):
         self.scene, self.base, self.law = scene, base, law
@@ -125,8 +133,7 @@ class _Scene2Monitor(Monitor):
                                   else np.zeros((0, 5)))
         rowsT = probes.gather_root(comm,
                                    np.column_stack([xT[:, 0], xT[:, 1], v]) if len(v) else np.zeros((0, 3)))
-        if rows is not None:
-            np.savez(path, vertices=rows, Tf=rowsT)
+        on_root(comm, lambda: np.savez(path, vertices=rows, Tf=rowsT), path)
 
     def report(self, problem, t):
         out = {"balance_max": self.base.worst.as_dict(), **{k: self.last.get(k) for k in (
@@ -246,8 +253,9 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         bcs += tip_tractions(b.model, constant_in_time(lam_tip), {"sym_y": 1})
         bcs += [Dirichlet("Tm", f, constant_in_time(T0)) for f in ("far_x", "far_y", "far_z")]
         mu = p.fluid_viscosity
-        dp = float(p.injection_rate * 12 * mu.mu(Ti) / (2 * np.pi * a_ref ** 3)
-                   * np.log(2 * p.scene2_well_offset / p.well_radius))
+        dp = rate_pressure_scale(float(p.injection_rate * 12 * mu.mu(Ti) / (2 * np.pi * a_ref ** 3)
+                                       * np.log(2 * p.scene2_well_offset / p.well_radius)),
+                                 p.initial_pressure, p.production_pressure)
         sT = FieldScale(abs(T0 - Ti) or 1.0, T0)
         scales = {"u": FieldScale(u_scale), "lam": FieldScale(self.lam0),
                   "pf": FieldScale(dp, p.initial_pressure),

@@ -21,7 +21,10 @@ def _inject(rank: int) -> None:
 
 
 if __name__ == "__main__":
+    rank, outdir = int(sys.argv[1]), sys.argv[2]
+    sys.argv = ["petthm", "heat_erfc", "-thm_output_dir", outdir, "-thm_quiet"]
+    import petsc4py
+    petsc4py.init(sys.argv)             # as main would: before the scenes import PETSc
     load_all()
-    _inject(int(sys.argv[1]))
-    sys.argv = ["petthm", "heat_erfc", "-thm_output_dir", sys.argv[2], "-thm_quiet"]
+    _inject(rank)
     sys.exit(main())

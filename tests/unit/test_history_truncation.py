@@ -3,6 +3,7 @@ its checkpoint, the checkpoint's own row included, whatever the rounding of
 the times history.csv writes (12 significant digits)."""
 import csv
 
+from mpi4py import MPI
 from petthm.checkpoint import truncate_history
 from petthm.output import History
 
@@ -18,7 +19,7 @@ def test_the_checkpoints_row_is_kept_when_its_time_is_rounded_up(tmp_path):
     negative control: the former tolerance t (1 + 1e-12) drops it."""
     path = str(tmp_path / "history.csv")
     t_ckpt = 1102.6564319570314
-    h = History(path, ["step", "time"], rank=0)
+    h = History(path, ["step", "time"], MPI.COMM_SELF)
     for step, t in enumerate([954.910887578, t_ckpt, 1257.789253554883]):
         h.write({"step": step, "time": t})
     h.close()
@@ -29,7 +30,7 @@ def test_the_checkpoints_row_is_kept_when_its_time_is_rounded_up(tmp_path):
 
 def test_rows_after_the_checkpoint_go(tmp_path):
     path = str(tmp_path / "history.csv")
-    h = History(path, ["step", "time"], rank=0)
+    h = History(path, ["step", "time"], MPI.COMM_SELF)
     for step, t in enumerate([0.0, 100.0, 205.0, 315.25]):
         h.write({"step": step, "time": t})
     h.close()
