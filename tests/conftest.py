@@ -35,6 +35,44 @@ def run_petthm(scene, outdir, *options, ranks=1, check=True, timeout=600):
     return proc, summary
 
 
+#: a coarse lauwerier (254 cells, 128 steps to 1e6 s in ~0.3 s): for tests of the run, not its resolution
+LAUWERIER_COARSE = ("lauwerier", "-options_file", f"{ROOT}/options/scenes/lauwerier.opts",
+                    "-thm_mesh_size", 20, "-thm_lauwerier_fracture_size", 5)
+
+
+def checkpoint_state(folder):
+    """(checkpoint.h5's state in the order of the serial mesh's points, any rank count; its attributes)."""
+    import h5py
+    with h5py.File(os.path.join(folder, "checkpoint.h5"), "r") as h5:
+        point, ndof, value = (np.concatenate([h5[name][k][...] for k in sorted(h5[name], key=int)])
+                              for name in ("point", "ndof", "value"))
+        meta = dict(h5.attrs)
+    blocks = np.split(value, np.cumsum(ndof)[:-1])
+    return np.concatenate([blocks[i] for i in np.argsort(point)]), meta
+
+
+def folder_digests(folder) -> dict:
+    """SHA-256 of every file in a folder but the lock (which names its last holder)."""
+    import hashlib
+    return {n: hashlib.sha256(open(os.path.join(folder, n), "rb").read()).hexdigest()
+            for n in sorted(os.listdir(folder))
+            if os.path.isfile(os.path.join(folder, n)) and n != ".petthm.lock"}
+
+
+def ranks_of(mpiexec_pid) -> list[int]:
+    """The PIDs of the processes mpiexec started (its children)."""
+    kids = []
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                stat = open(f"/proc/{d}/stat").read()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == mpiexec_pid:
+                kids.append(int(d))
+    return kids
+
+
 def build_problem(tmp_path, scene, **opts):
     """Set up (not run) a scene in this process with -thm_* options; returns its Problem."""
     from petsc4py import PETSc

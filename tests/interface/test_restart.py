@@ -16,7 +16,7 @@ import pytest
 
 from petthm.output import read_output
 
-from conftest import MPI_ENV, ROOT, run_petthm, solver_without_parallel_direct
+from conftest import MPI_ENV, ROOT, checkpoint_state, ranks_of, run_petthm, solver_without_parallel_direct
 
 #: a coarse lauwerier (128 steps in ~2 s): what is tested is the restart, not the resolution
 LAUWERIER = ("lauwerier", ("-thm_mesh_size", 20, "-thm_lauwerier_fracture_size", 5, "-thm_final_time", 1e6))
@@ -46,12 +46,7 @@ def _wait_for(path, rows=0, timeout=300):
 
 def _final_state(outdir):
     """The checkpoint's values in the order of the serial mesh's points (any rank count)."""
-    with h5py.File(os.path.join(outdir, "checkpoint.h5"), "r") as h5:
-        point, ndof, value = (np.concatenate([h5[name][k][...] for k in sorted(h5[name], key=int)])
-                              for name in ("point", "ndof", "value"))
-        meta = dict(h5.attrs)
-    blocks = np.split(value, np.cumsum(ndof)[:-1])
-    return np.concatenate([blocks[i] for i in np.argsort(point)]), meta
+    return checkpoint_state(outdir)
 
 
 def _final_output(outdir, name="Tm"):
@@ -92,20 +87,6 @@ def test_kill_9_then_restart_gives_the_uninterrupted_run(tmp_path, scene, option
     assert _times(out) == _times(tmp_path / "ref")
 
 
-def _ranks_of(mpiexec_pid):
-    """The PIDs of the processes mpiexec started (its children)."""
-    kids = []
-    for d in os.listdir("/proc"):
-        if d.isdigit():
-            try:
-                stat = open(f"/proc/{d}/stat").read()
-            except OSError:
-                continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == mpiexec_pid:
-                kids.append(int(d))
-    return kids
-
-
 @pytest.mark.parametrize("scene,options", [LAUWERIER, SCENE2], ids=["lauwerier", "scene2"])
 def test_kill_9_on_two_ranks_then_restart_gives_the_uninterrupted_run(tmp_path, scene, options):
     """2 ranks, each killed with SIGKILL after the first checkpoint (a node
@@ -117,7 +98,7 @@ def test_kill_9_on_two_ranks_then_restart_gives_the_uninterrupted_run(tmp_path, 
     out = tmp_path / "killed"
     proc = _start(scene, out, (*options, "-thm_checkpoint_interval", 5), ranks=2)
     _wait_for(out / "checkpoint.h5")
-    ranks = _ranks_of(proc.pid)
+    ranks = ranks_of(proc.pid)
     for pid in ranks:
         os.kill(pid, signal.SIGKILL)
     proc.communicate(timeout=60)

@@ -12,24 +12,27 @@ import os
 import subprocess
 import sys
 
-import h5py
 import numpy as np
 import pytest
 
-from conftest import MPI_ENV, ROOT, run_petthm
+from conftest import LAUWERIER_COARSE, MPI_ENV, ROOT, checkpoint_state, run_petthm
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-LAUWERIER = ("lauwerier", "-options_file", f"{ROOT}/options/scenes/lauwerier.opts", "-thm_mesh_size", 20,
-             "-thm_lauwerier_fracture_size", 5, "-thm_final_time", 1e7, "-thm_checkpoint_interval", 5)
+LAUWERIER = (*LAUWERIER_COARSE, "-thm_final_time", 1e7, "-thm_checkpoint_interval", 5)
 
 
 def _state(folder):
-    with h5py.File(os.path.join(folder, "checkpoint.h5"), "r") as h5:
-        point, ndof, value = (np.concatenate([h5[n][k][...] for k in sorted(h5[n], key=int)])
-                              for n in ("point", "ndof", "value"))
-        t = float(h5.attrs["time"])
-    blocks = np.split(value, np.cumsum(ndof)[:-1])
-    return np.concatenate([blocks[i] for i in np.argsort(point)]), t
+    x, meta = checkpoint_state(folder)
+    return x, float(meta["time"])
+
+
+def _restart_ends_as(out, ref):
+    """-thm_restart of ``out`` completes with the final state of the run in ``ref`` (1e-10)."""
+    proc = _run([*LAUWERIER, "-thm_restart", out])
+    assert proc.returncode == 0, proc.stderr
+    x, t = _state(out)
+    x_ref, t_ref = _state(ref)
+    assert t == t_ref and np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
 
 
 def _folder_bytes(folder):
@@ -112,15 +115,10 @@ def test_a_disk_filling_mid_run_fails_cleanly_and_the_restart_completes(small_di
     else:
         proc = _run([*LAUWERIER, "-thm_output_dir", out], faults=("no-space", 20))
     assert "No space left on device" in _one_line(proc) and "-thm_restart" in proc.stderr
-    x, t = _state(out)
-    assert 0 < t < 1e7
+    assert 0 < _state(out)[1] < 1e7
     if disk.mounted:
         disk.free_space()
-    proc = _run([*LAUWERIER, "-thm_restart", out])
-    assert proc.returncode == 0, proc.stderr
-    x, t = _state(out)
-    x_ref, t_ref = _state(tmp_path / "ref")
-    assert t == t_ref and np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
+    _restart_ends_as(out, tmp_path / "ref")
 
 
 def test_kill_9_in_a_checkpoint_write_then_restart_gives_the_uninterrupted_run(tmp_path):
@@ -132,13 +130,8 @@ def test_kill_9_in_a_checkpoint_write_then_restart_gives_the_uninterrupted_run(t
     proc = _run([*LAUWERIER, "-thm_output_dir", out], faults=("kill-in-checkpoint", 3))
     assert proc.returncode == -9
     assert (out / "checkpoint.h5.tmp").exists()
-    x, t = _state(out)
-    assert t > 0
-    proc = _run([*LAUWERIER, "-thm_restart", out])
-    assert proc.returncode == 0, proc.stderr
-    x, t = _state(out)
-    x_ref, t_ref = _state(tmp_path / "ref")
-    assert t == t_ref and np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
+    assert _state(out)[1] > 0
+    _restart_ends_as(out, tmp_path / "ref")
 
 
 def test_more_ranks_than_cells_is_a_one_line_error(tmp_path):

@@ -5,10 +5,9 @@ rules with its file and line; water must be liquid (IAPWS-IF97 region 1);
 lengths must fit the domain."""
 import pytest
 
-from conftest import ROOT, run_petthm
+from conftest import LAUWERIER_COARSE, run_petthm
 
-LAUWERIER = ("lauwerier", "-options_file", f"{ROOT}/options/scenes/lauwerier.opts", "-thm_mesh_size", 20,
-             "-thm_lauwerier_fracture_size", 5, "-thm_final_time", 1e6)
+LAUWERIER = (*LAUWERIER_COARSE, "-thm_final_time", 1e6)
 
 
 def _error(proc):

@@ -3,7 +3,6 @@ replaces another run's output unless asked (-thm_overwrite), and then only
 the files of that run's manifest; a folder in use is locked; a run refused
 for its input leaves the folder as it found it."""
 import fcntl
-import hashlib
 import json
 import os
 import signal
@@ -13,18 +12,10 @@ import time
 
 from petsc4py import PETSc
 
-from conftest import MPI_ENV, ROOT, run_petthm
+from conftest import LAUWERIER_COARSE, folder_digests, MPI_ENV, ROOT, run_petthm
 
 ERFC = ("heat_erfc", "-thm_final_time", 1e3)
-LAUWERIER = ("lauwerier", "-options_file", f"{ROOT}/options/scenes/lauwerier.opts", "-thm_mesh_size", 20,
-             "-thm_lauwerier_fracture_size", 5, "-thm_final_time", 1e6)
-
-
-def _digests(folder):
-    """SHA-256 of every file in the folder but the lock (which names its last holder)."""
-    return {n: hashlib.sha256(open(os.path.join(folder, n), "rb").read()).hexdigest()
-            for n in sorted(os.listdir(folder))
-            if os.path.isfile(os.path.join(folder, n)) and n != ".petthm.lock"}
+LAUWERIER = (*LAUWERIER_COARSE, "-thm_final_time", 1e6)
 
 
 def _one_error_line(proc):
@@ -43,11 +34,11 @@ def test_a_finished_run_is_refused_then_replaced_with_overwrite_keeping_the_user
     for name, text in (("my.opts", "-thm_rock_conductivity 3\n"), ("job.log", "log\n"),
                        ("mine.msh", "$MeshFormat\n")):
         (out / name).write_text(text)
-    before = _digests(out)
+    before = folder_digests(out)
     proc, _ = run_petthm(ERFC[0], out, *ERFC[1:], check=False)
     msg = _one_error_line(proc)
     assert proc.returncode == 2 and "-thm_restart" in msg and "-thm_overwrite" in msg, msg
-    assert _digests(out) == before
+    assert folder_digests(out) == before
     proc, summary = run_petthm(ERFC[0], out, *ERFC[1:], "-thm_overwrite")
     assert summary["scene"] == "heat_erfc" and summary["status"] == "completed"
     names = set(os.listdir(out))

@@ -1,11 +1,14 @@
-"""The README's commands after ``make demo``, copied as written into a
-fresh shell: the activation line, then the "Running" block (a test of the
-newcomer's first minutes: docs/reliability.md, "Newcomer")."""
+"""A newcomer's first minutes (docs/reliability.md, "Newcomer"): the
+README's commands after ``make demo``, copied as written into a fresh
+shell (the activation line, then the "Running" block), and every
+verification scene's errors against its reference printed at the end."""
 import os
 import re
 import subprocess
 
-from conftest import MPI_ENV, ROOT
+import pytest
+
+from conftest import MPI_ENV, ROOT, run_petthm
 
 
 def _block_after(text: str, marker: str) -> str:
@@ -29,3 +32,33 @@ def test_the_readmes_commands_work_in_a_fresh_shell(tmp_path):
     assert "scenes:" in proc.stdout and "parameters (-option" in proc.stdout
     assert proc.stdout.count("completed: t = ") == 3, proc.stdout
     assert "Traceback" not in proc.stderr
+
+
+#: every scene with a reference solution, with fast settings (the restart test
+#: tests/reliability/test_restart_consistency.py covers the others: WHOLE_RUN)
+PRINTS_ERRORS = {
+    "coupled_mms": ("-ts_max_steps", 1, "-thm_fe_degree", 1),
+    "heat_mms": ("-thm_fe_degree", 1),
+    "heat_erfc": ("-thm_final_time", 1e4),
+    "fracture_flow_patch": (),
+    "radial_flow": ("-thm_fe_degree", 1),
+    "leakoff_heat": ("-thm_fe_degree", 1, "-thm_mesh_size", 20, "-thm_leakoff_heat_fracture_size", 2),
+    "gravity_column": (),
+    "sneddon": ("-thm_sneddon_dim", 2, "-thm_fe_degree", 1),
+    "inclined_crack": ("-thm_fe_degree", 1),
+}
+#: the scenes without a reference solution: the paper's scenes and partial_opening (its active set)
+NO_REFERENCE = {"rigid_fracture", "penny_impermeable", "inclined_penny", "partial_opening"}
+
+
+@pytest.mark.parametrize("scene", sorted(PRINTS_ERRORS))
+def test_every_verification_scene_prints_its_errors_at_the_end(tmp_path, scene):
+    from test_restart_consistency import WHOLE_RUN
+    from petthm.scenes import load_all
+    from petthm.scenes.base import REGISTRY
+    load_all()
+    assert set(REGISTRY) - NO_REFERENCE == set(PRINTS_ERRORS) | set(WHOLE_RUN)
+    proc, s = run_petthm(scene, tmp_path, *PRINTS_ERRORS[scene], check=False)
+    assert proc.returncode in (0, 4), proc.stderr
+    line = next(x for x in proc.stdout.splitlines() if x.startswith("errors against the reference: "))
+    assert all(f"{k} " in line for k, v in s["error"].items() if v is not None), (line, s["error"])

@@ -9,23 +9,16 @@ import subprocess
 import sys
 import time
 
-import h5py
 import numpy as np
 import pytest
 
-from conftest import MPI_ENV, ROOT, run_petthm
-
-LAUWERIER = ("lauwerier", "-options_file", f"{ROOT}/options/scenes/lauwerier.opts", "-thm_mesh_size", 20,
-             "-thm_lauwerier_fracture_size", 5)
+from conftest import LAUWERIER_COARSE as LAUWERIER
+from conftest import MPI_ENV, ROOT, checkpoint_state, ranks_of, run_petthm
 
 
 def _state(folder):
-    with h5py.File(os.path.join(folder, "checkpoint.h5"), "r") as h5:
-        point, ndof, value = (np.concatenate([h5[n][k][...] for k in sorted(h5[n], key=int)])
-                              for n in ("point", "ndof", "value"))
-        t = float(h5.attrs["time"])
-    blocks = np.split(value, np.cumsum(ndof)[:-1])
-    return np.concatenate([blocks[i] for i in np.argsort(point)]), t
+    x, meta = checkpoint_state(folder)
+    return x, float(meta["time"])
 
 
 def test_max_steps_stops_with_exit_code_4_and_the_run_continues(tmp_path):
@@ -52,19 +45,6 @@ def test_max_wall_stops_with_a_checkpoint_and_exit_code_3_and_the_restart_is_the
     assert np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
 
 
-def _ranks_of(mpiexec_pid):
-    kids = []
-    for d in os.listdir("/proc"):
-        if d.isdigit():
-            try:
-                stat = open(f"/proc/{d}/stat").read()
-            except OSError:
-                continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == mpiexec_pid:
-                kids.append(int(d))
-    return kids
-
-
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGUSR1"])
 @pytest.mark.parametrize("ranks", [1, 2, 3])
 def test_a_signal_to_the_ranks_checkpoints_and_exits_3(tmp_path, ranks, sig):
@@ -81,7 +61,7 @@ def test_a_signal_to_the_ranks_checkpoints_and_exits_3(tmp_path, ranks, sig):
     while time.time() < end and proc.poll() is None and not (
             os.path.exists(out / "history.csv") and sum(1 for _ in open(out / "history.csv")) > 4):
         time.sleep(0.02)
-    pids = _ranks_of(proc.pid) if ranks > 1 else [proc.pid]
+    pids = ranks_of(proc.pid) if ranks > 1 else [proc.pid]
     assert len(pids) == ranks
     for pid in pids:
         os.kill(pid, getattr(signal, sig))

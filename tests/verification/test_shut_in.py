@@ -59,6 +59,9 @@ def test_zero_injection_rate_is_a_quiet_shut_in(tmp_path, case):
     assert not NOT_A_NUMBER.search((out / "summary.json").read_text())
     for name, value in (summary.get("error") or {}).items():      # the references: finite (or None)
         assert value is None or math.isfinite(value), (name, value)
+    for name in ("mass_balance", "energy_balance"):    # at rest: not round-off / round-off (it was 1.0)
+        value = (summary.get("balance_max") or {}).get(name)
+        assert value is None or value <= 1e-4, (name, value)    # Scene 2's contact: 8.6e-6 of balance.REST
     rows = list(csv.DictReader(open(out / "history.csv")))
     for row in rows:
         bad = {k for k, v in row.items() if k not in NOT_EVALUATED and NOT_A_NUMBER.fullmatch(v.strip())}
