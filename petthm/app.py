@@ -23,52 +23,23 @@ from .constraints import boundary_entries
 from . import checkpoint
 from .errors import InputError, WriteFailure, petsc_option_errors
 from .fields import Discretisation
-from .mesh import Mesh, distribute, label_boundaries, read_plex
+from .mesh import Mesh, bounding_box, check_every_rank_has_cells, distribute, label_boundaries, read_plex
 from .model import Domain
-from .monitors import contact_node_fields, hit
-from .output import FieldWriter, History, on_root, write_summary
+from .output import FieldWriter, History, write_summary
 from .problem import Problem
+from .provenance import git_commit, options_in_effect, peak_memory_mb, solver_costs
+from .continuation import Continuation, end_time, option_record
 from .rundir import RunFolder, with_temporary
+from .stepreport import StepReport
 from .scenes.base import REGISTRY
 from .recipes import solver_defaults_by_size
-from .solver import (PROPOSED, SOLVER_DEFAULTS, StepControl, TimeStepper, error_control_defaults,
-                     failure_message, propose_defaults, serial_plane_direct)
-
-#: options PETSc reads only at finalize or start-up; never "unused"
-_LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
-                 "memory_view", "log_", "on_error", "no_signal_handler", "fp_trap",
-                 "check_pointer_intensity", "viewer_binary", "history", "options_monitor", "mpi_")
-
-
-#: a solver recipe may set the split of a field the scene does not have
-_RECIPE_SPLITS = tuple(f"{pre}fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam",
-                                                         "rest") for pre in ("", "vi_"))
-
+from .solver import (SOLVER_DEFAULTS, StepControl, TimeStepper, check_unused_petsc_options,
+                     drop_unused_proposals, error_control_defaults, failure_message, propose_defaults,
+                     serial_plane_direct)
 
 def _say(comm, msg):
     if comm.rank == 0:
         print(msg, flush=True)
-
-
-def check_unused_petsc_options() -> None:
-    """Raise InputError naming the first option nothing has read (a misspelling)."""
-    from .solver import PROPOSED
-    left = [o for o in compat.unused_options()
-            if not o.startswith(_LATE_OPTIONS + _RECIPE_SPLITS) and o not in PROPOSED]
-    if left:
-        raise InputError(f"option -{left[0]} was not used by any solver or petthm component "
-                         "(misspelt, or not valid for this scene)")
-
-
-def drop_unused_proposals() -> None:
-    """Remove the solver options petthm proposed that no solver read (e.g.
-    the direct-solver defaults when a recipe picks another preconditioner),
-    so that PETSc's report of unused options at exit names only the user's."""
-    from .solver import PROPOSED
-    opts = PETSc.Options()
-    for o in compat.unused_options():
-        if o in PROPOSED:
-            opts.delValue(o)
 
 
 def make_scene(name: str):
@@ -84,69 +55,6 @@ def make_scene(name: str):
     return scene
 
 
-#: the PETSc and petthm events whose count and time summary.json reports
-SOLVER_EVENTS = ("SNESSolve", "SNESJacobianEval", "KSPSolve", "PCSetUp", "PCApply", "thm.residual",
-                 "thm.jacobian")
-
-
-def solver_costs() -> dict:
-    """{event: {"count", "time" (s, the largest over ranks)}} of the solve stage."""
-    stage = PETSc.Log.Stage("solve")
-    comm = PETSc.COMM_WORLD.tompi4py()
-    out = {}
-    for name in SOLVER_EVENTS:
-        info = PETSc.Log.Event(name).getPerfInfo(stage)
-        out[name] = {"count": int(info["count"]), "time": comm.allreduce(float(info["time"]), op=_mpi_max())}
-    return out
-
-
-def peak_memory_mb() -> dict:
-    """Peak resident memory (MB): the largest rank's, rank 0's (which reads
-    and meshes before the distribution) and the sum over ranks."""
-    import resource
-    mine = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0      # kB on Linux
-    comm = PETSc.COMM_WORLD.tompi4py()
-    return {"max_rank": comm.allreduce(mine, op=_mpi_max()), "rank0": comm.bcast(mine, root=0),
-            "total": comm.allreduce(mine)}
-
-
-def _mpi_max():
-    from mpi4py import MPI
-    return MPI.MAX
-
-
-def git_commit() -> str | None:
-    """The petthm source's git commit (+ "-dirty" with uncommitted changes), or None."""
-    import subprocess
-    here = os.path.dirname(os.path.abspath(__file__))
-    try:
-        rev = subprocess.run(["git", "-C", here, "rev-parse", "HEAD"], capture_output=True, text=True,
-                             timeout=10)
-        if rev.returncode:
-            return None
-        dirty = subprocess.run(["git", "-C", here, "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-        return rev.stdout.strip() + ("-dirty" if dirty else "")
-    except (OSError, subprocess.SubprocessError):
-        return None
-
-
-def options_in_effect() -> dict[str, str]:
-    """Every PETSc option in the database (the user's and petthm's proposals)."""
-    return {"-" + k: v for k, v in sorted(PETSc.Options().getAll().items())}
-
-
-def users_options() -> dict[str, str]:
-    """The PETSc options the user gave (the database less petthm's proposals)."""
-    return {k: v for k, v in PETSc.Options().getAll().items() if k not in PROPOSED}
-
-
-def end_time(scene) -> float:
-    """The run's end time: -ts_max_time if given, else the scene's (-thm_final_time or its default)."""
-    opts = PETSc.Options()
-    return opts.getReal("ts_max_time") if opts.hasName("ts_max_time") else scene.final_time
-
-
 class Run:
     """One simulation of a scene (collective on PETSc.COMM_WORLD)."""
 
@@ -155,9 +63,7 @@ class Run:
         self.comm = PETSc.COMM_WORLD
         self.mpi = self.comm.tompi4py()
         run = scene.run
-        self.saved: dict | None = None            # the metadata of the checkpoint a restart continues
-        if run.restart:
-            self._check_restart_folder()
+        self.continuation = Continuation(scene, self.comm) if run.restart else None
         self.outdir = scene.output_dir
         self.folder = RunFolder(self.outdir, self.comm)
         self._folder_open = False
@@ -165,29 +71,13 @@ class Run:
         self.stage_wall = {}
         self.t_start = time.perf_counter()
         self._last_checkpoint = self.t_start
-        self.mesh_path = run.mesh_file
+        self.mesh_path = run.mesh_file or (self.continuation.mesh_file() if self.continuation else "")
         self.mesh_digest: str | None = None
-        written = os.path.join(run.restart, "mesh.msh") if run.restart else ""
-        if not self.mesh_path and written and os.path.isfile(written):
-            self.mesh_path = written                  # the very mesh of the run a restart continues
         self.problem: Problem | None = None
         self.monitor = None                           # the scene's Monitor (``setup``)
         PETSc.Log.begin()                   # event counts and times for summary.json's solver_costs
 
     # -- the output folder and what a restart continues -------------------------------------
-    def _check_restart_folder(self) -> None:
-        run = self.scene.run
-        if run.output_dir and os.path.abspath(run.output_dir) != os.path.abspath(run.restart):
-            raise InputError(f"options -thm_restart = {run.restart} and -thm_output_dir = "
-                             f"{run.output_dir}: a restart goes on in the folder of the run it "
-                             "continues (give -thm_restart alone)")
-        if run.overwrite:
-            raise InputError(f"options -thm_restart = {run.restart} and -thm_overwrite: a restart "
-                             "continues the run in its folder, -thm_overwrite replaces it (give one of them)")
-        if not os.path.isdir(run.restart):
-            raise InputError(f"option -thm_restart = {run.restart}: no such folder")
-        self.saved = checkpoint.check(run.restart, self.scene.name)
-
     def open_folder(self) -> None:
         """Lock the output folder and check what it holds (``rundir``); a
         restart then checks that its options keep the problem of the
@@ -199,8 +89,8 @@ class Run:
         self._folder_open = True
         for note in self.folder.notes:
             _say(self.comm, note)
-        if run.restart:
-            self._check_options_kept()
+        if self.continuation is not None:
+            self.continuation.check_options()
 
     def claim(self, names) -> None:
         """Record files in the folder's manifest before they are written."""
@@ -211,7 +101,7 @@ class Run:
         """After an input error: remove the files this run wrote (a new run's
         only: a restart's folder holds the run it continues), so that the
         corrected command can start in the same folder (collective)."""
-        if self.scene.run.restart or not self._folder_open:
+        if self.continuation is not None or not self._folder_open:
             return
         if self.comm.rank == 0:
             for name in self._claimed:
@@ -219,53 +109,6 @@ class Run:
                 if os.path.isfile(path):
                     os.remove(path)
         self.comm.barrier()
-
-    def _check_options_kept(self) -> None:
-        """A restart continues the same problem: the physics, mesh and
-        discretisation options of the checkpoint's record must not change."""
-        import json
-        raw = checkpoint.read_record(self.outdir, "options")
-        if raw is None:
-            _say(self.comm, f"petthm: note: {self.outdir}/{checkpoint.FILE} records no options (an older "
-                 "petthm): the restart's options are not checked against the run it continues")
-            return
-        saved = json.loads(raw.decode())
-        changes = checkpoint.option_changes(saved, self.option_record())
-        if changes:
-            raise InputError(f"option -thm_restart = {self.outdir}: a restart continues the same problem, "
-                             f"but {'this option differs' if len(changes) == 1 else 'these options differ'} "
-                             f"from the checkpoint's: {'; '.join(changes)} (start a new run for "
-                             "that: another -thm_output_dir, or -thm_overwrite)")
-
-    def option_record(self) -> dict:
-        """Every option in effect, with its kind (``params.option_record``), as JSON reads it back."""
-        import json
-        record = P.option_record((self.scene.run, self.scene.p), users_options())
-        return json.loads(json.dumps(record, default=str))
-
-    def _check_mesh_kept(self, path: str) -> None:
-        """A restart reads the mesh file the checkpoint's run read (its SHA-256)."""
-        saved = (self.saved or {}).get("mesh_sha256")
-        if saved and self.mesh_digest != saved:
-            raise InputError(f"option -thm_restart = {self.outdir}: the mesh file '{path}' is not the one "
-                             "the checkpoint's run read (its contents changed): restore that mesh, or "
-                             "start a new run")
-
-    def already_at_end(self) -> dict | None:
-        """A restart of a run that has reached the end time: a summary that
-        says so (the folder is left as it is); past it: an ``InputError``."""
-        t_saved, t_end = float(self.saved["time"]), end_time(self.scene)
-        if t_saved > t_end * (1 + 1e-12):
-            raise InputError(f"option -thm_restart = {self.outdir}: the run is at t = {t_saved:.6g} s, past "
-                             f"the end time {t_end:.6g} s (-thm_final_time, -ts_max_time); give a later "
-                             "end time to continue it")
-        if t_saved < t_end * (1 - 1e-12):
-            return None
-        message = (f"the run in {self.outdir} has reached its end time t = {t_end:.6g} s: nothing to "
-                   "continue (give a later end time, -thm_final_time, to run on); its output is unchanged")
-        _say(self.comm, message)
-        return {"scene": self.scene.name, "status": "completed", "exit_code": 0, "final_time": t_saved,
-                "message": message}
 
     # -- phases ----------------------------------------------------------------
     def _stage(self, name):
@@ -295,20 +138,21 @@ class Run:
                            lambda e: str(e) if isinstance(e, InputError) else
                            f"cannot write {path}: {e.strerror or e}")
         self.mesh_digest = self._digest(path)
-        self._check_mesh_kept(path)
+        if self.continuation is not None:
+            self.continuation.check_mesh(path, self.mesh_digest)
         with petsc_option_errors(f"the mesh file '{path}'"):
             dm = read_plex(path, self.comm)
         want, option = scene.mesh_dimension()
         if want and dm.getDimension() != want:
             raise InputError(f"mesh '{path}' is {dm.getDimension()}D, but scene {scene.name} is {want}D"
                              + (f" (option -{option} = {want})" if option else ""))
-        scene.check_against_domain(*self._bounding_box(dm))
+        scene.check_against_domain(*bounding_box(dm))
         with self._user_mesh_fits(dm.getDimension()):
             label_boundaries(dm, scene.boundaries())
         from .fracture import split_fractures
         dm, _ = split_fractures(dm)
         dm = distribute(dm)
-        self._check_every_rank_has_cells(dm)
+        check_every_rank_has_cells(dm)
         mesh = Mesh(dm)
         self._pop("mesh", st, t0)
         self.mesh_path = path
@@ -323,27 +167,6 @@ class Run:
             except OSError:
                 pass
         return self.mpi.bcast(digest, root=0)
-
-    def _bounding_box(self, dm):
-        """The (lower, upper) corners of the mesh's coordinates (collective)."""
-        import numpy as np
-        from mpi4py import MPI
-        cdim = dm.getCoordinateDim()
-        x = dm.getCoordinatesLocal().getArray(readonly=True).reshape(-1, cdim)
-        lo = x.min(axis=0) if len(x) else np.full(cdim, np.inf)
-        hi = x.max(axis=0) if len(x) else np.full(cdim, -np.inf)
-        lower, upper = np.empty(cdim), np.empty(cdim)
-        self.mpi.Allreduce(lo, lower, op=MPI.MIN)
-        self.mpi.Allreduce(hi, upper, op=MPI.MAX)
-        return lower, upper
-
-    def _check_every_rank_has_cells(self, dm) -> None:
-        start, end = dm.getHeightStratum(0)
-        counts = self.mpi.allgather(end - start)
-        if min(counts) == 0:
-            raise InputError(f"the mesh's {sum(counts)} cells cannot feed {len(counts)} ranks (rank "
-                             f"{counts.index(0)} has none): run on fewer ranks, or refine the mesh "
-                             "(-thm_mesh_size, -dm_refine)")
 
     @contextlib.contextmanager
     def _user_mesh_fits(self, dim: int):
@@ -437,19 +260,19 @@ class Run:
         return disc, problem, control, rs, setup.monitor
 
     def execute(self) -> dict:
-        if self.scene.run.restart:
+        if self.continuation is not None:
             self.open_folder()
-            done = self.already_at_end()
+            done = self.continuation.already_at_end()
             if done is not None:
                 return done
         mesh = self.build_mesh()
         disc, problem, control, rscales, scene_monitor = self.setup(mesh)
         self._print_start(mesh, disc, problem, rscales)
         st, t0 = self._stage("output")
-        resume = self._restore(problem) if self.scene.run.restart else None
+        resume = self.continuation.restore(problem, self.monitor) if self.continuation else None
         writers, history = self._start_output(disc, problem, scene_monitor, resume)
         self._pop("output", st, t0)
-        steps = _StepReport(self, problem, control, scene_monitor, writers, history, resume)
+        steps = StepReport(self, problem, control, scene_monitor, writers, history, resume)
         with petsc_option_errors("the solver options (-ts_*, -snes_*, -ksp_*, -pc_*)"):
             stepper = TimeStepper(problem, control, steps)
         steps.stepper = stepper
@@ -607,21 +430,6 @@ class Run:
                 pass
         return self.mpi.bcast(text, root=0)
 
-    def _restore(self, problem) -> dict:
-        """Load the checkpoint of the run a restart continues (the state
-        after problem set-up: the same scales, proposals and initial
-        conditions as the original run), the monitors' state, and drop the
-        history rows after it."""
-        meta = checkpoint.read(self.outdir, problem.X, problem.dm, self.scene.name)
-        state = checkpoint.read_record(self.outdir, "monitor")
-        if state is not None:
-            self.monitor.restore(checkpoint.unpack_state(state, os.path.join(self.outdir, checkpoint.FILE)))
-        history = os.path.join(self.outdir, "history.csv")
-        on_root(self.comm, lambda: checkpoint.truncate_history(history, meta["time"]), history)
-        _say(self.comm, f"restart from {os.path.join(self.outdir, checkpoint.FILE)}: "
-             f"t = {meta['time']:.6g} s, step {meta['step']}")
-        return meta
-
     def _checkpoint_due(self, step: int) -> bool:
         """Every -thm_checkpoint_interval steps, or when -thm_checkpoint_wall
         seconds have passed since the last checkpoint (rank 0's clock decides)."""
@@ -645,119 +453,18 @@ class Run:
                 "wall": steps.wall_before + time.perf_counter() - self.t_start,
                 **({"mesh_sha256": self.mesh_digest} if self.mesh_digest else {}),
                 **stepper.schedule_state()}
-        records = {"options": json.dumps(self.option_record()).encode(),
+        records = {"options": json.dumps(option_record(self.scene)).encode(),
                    "monitor": checkpoint.pack_state(self.monitor.carried_state())}
         checkpoint.write(self.outdir, self.problem.X, self.problem.dm, meta, records)
+
+    @staticmethod
+    def check_unused_options() -> None:
+        check_unused_petsc_options()
 
     @staticmethod
     def _si_out(problem, name, t):
         v = problem.field_values(name, t=t)
         return v - P.CELSIUS if name.startswith("T") else v
-
-
-class _StepReport:
-    """What happens after every accepted step (and for the initial state):
-    the history row, field output, checkpoints, and the checks that stop a
-    run (the scene's verdict, a signal, -thm_max_wall), then the progress line."""
-
-    def __init__(self, run: Run, problem, control, scene_monitor, writers, history, resume):
-        self.run, self.problem, self.control = run, problem, control
-        self.scene_monitor, self.writers, self.history = scene_monitor, writers, history
-        self.resume = resume
-        self.t_resume = resume["time"] if resume else None
-        self.resumed_from = {"time": resume["time"], "step": int(resume["step"])} if resume else None
-        self.rejected_before = int(resume.get("rejected", 0)) if resume else 0
-        self.wall_before = float(resume.get("wall", 0.0)) if resume else 0.0
-        self.stepper = None
-        self.stop = checkpoint.StopRequest()
-        self.its = (0, 0)
-        self.wall = time.perf_counter()
-        self.last_t = 0.0
-        self.rows = 0
-        self.step_walls: list[float] = []
-        self.interval = run.scene.run.output_interval or run.scene.time.output_interval
-
-    def write_fields(self, t: float) -> None:
-        run, problem = self.run, self.problem
-        s, t1 = run._stage("output")
-        for w, fields in self.writers:
-            out = {f.name: run._si_out(problem, f.name, t) for f in fields}
-            if any(f.name == "lam" for f in fields):          # opening, aperture, slip, ...
-                out.update({k: v for k, v in contact_node_fields(problem, t=t).items()
-                            if k not in ("weight", "slipping_area")})
-            w.write(t, out)
-        run._pop("output", s, t1)
-
-    def whole_run_iterations(self) -> tuple[int, int]:
-        """(Newton, Krylov) iterations of the whole run: history.csv's sums
-        (a restart's file holds the rows of the run it continues)."""
-        import csv
-        totals = None
-        if self.run.comm.rank == 0:
-            try:
-                with open(self.history.path, newline="") as f:
-                    rows = list(csv.DictReader(f))
-                totals = tuple(sum(int(float(r[k] or 0)) for r in rows) for k in ("snes_its", "ksp_its"))
-            except (OSError, KeyError, ValueError):
-                totals = None
-        totals = self.run.mpi.bcast(totals, root=0)
-        return totals if totals is not None else self.stepper.iterations()
-
-    def __call__(self, step, t, X):
-        run, stepper, control = self.run, self.stepper, self.control
-        if self.rows and t == self.last_t:    # TS's last call after a failed step: no new state
-            return
-        self.rows += 1
-        snes_its, ksp_its = stepper.iterations() if stepper else (0, 0)
-        dn, dk = snes_its - self.its[0], ksp_its - self.its[1]
-        self.its = (snes_its, ksp_its)
-        dt = t - self.last_t
-        self.last_t = t
-        row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk,
-               "wall": time.perf_counter() - run.t_start + self.wall_before}
-        row.update(self.scene_monitor(self.problem, t, X))
-        if self.resume and t == self.t_resume:            # the state the restart starts from is written
-            return
-        self.history.write(row)
-        if step == 1:
-            check_unused_petsc_options()
-        if step % self.interval == 0 or t >= control.final_time * (1 - 1e-12) or hit(t, control.hit_times):
-            self.write_fields(t)                          # and at the times the scene lands on
-        if step > 0 and run._checkpoint_due(step):
-            run._checkpoint(stepper, self)
-        if self._stopped(step, t):
-            return
-        self._progress(step, t, dt, dn, dk)
-
-    def _stopped(self, step: int, t: float) -> bool:
-        """Stop after this step if the scene says the run cannot go on, a
-        signal came, or -thm_max_wall has passed (the last two with a checkpoint)."""
-        run, stepper = self.run, self.stepper
-        reason = self.scene_monitor.stop_reason()
-        if reason:
-            stepper.fail(f"{reason} (t = {t:.6g} s, step {step})")
-            return True
-        received = self.stop.agreed(run.comm)
-        limit = not received and run.past_wall_limit()
-        if received or limit:
-            run._checkpoint(stepper, self)
-            cause = f"{received}" if received else f"-thm_max_wall {run.scene.run.max_wall:g} s"
-            stepper.request_stop(f"stopped by {cause} at t = {t:.6g} s after step {step}; continue with "
-                                 f"-thm_restart {run.outdir}",
-                                 status="interrupted" if received else "stopped")
-            return True
-        return False
-
-    def _progress(self, step, t, dt, dn, dk) -> None:
-        now = time.perf_counter()
-        self.step_walls = (self.step_walls + [now - self.wall])[-5:]
-        self.wall = now
-        if self.run.scene.run.quiet or step <= 0:
-            return
-        frac = t / self.control.final_time
-        eta = self.control.steps_left(t, dt) * sum(self.step_walls) / len(self.step_walls)
-        _say(self.run.comm, f"step {step:5d}  t = {t:.4e} s  dt = {dt:.3e} s  newton {dn:2d}  "
-             f"krylov {dk:4d}  {100 * frac:5.1f} %  left ~{eta:7.1f} s")
 
 
 def run_scene(name: str) -> dict:

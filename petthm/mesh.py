@@ -52,6 +52,31 @@ def read_plex(path: str, comm: PETSc.Comm) -> PETSc.DMPlex:
     return dm
 
 
+def bounding_box(dm: PETSc.DMPlex) -> tuple[np.ndarray, np.ndarray]:
+    """The (lower, upper) corners of the mesh's coordinates over every rank (collective)."""
+    from mpi4py import MPI
+    comm = dm.comm.tompi4py()
+    cdim = dm.getCoordinateDim()
+    x = dm.getCoordinatesLocal().getArray(readonly=True).reshape(-1, cdim)
+    lo = x.min(axis=0) if len(x) else np.full(cdim, np.inf)
+    hi = x.max(axis=0) if len(x) else np.full(cdim, -np.inf)
+    lower, upper = np.empty(cdim), np.empty(cdim)
+    comm.Allreduce(lo, lower, op=MPI.MIN)
+    comm.Allreduce(hi, upper, op=MPI.MAX)
+    return lower, upper
+
+
+def check_every_rank_has_cells(dm: PETSc.DMPlex) -> None:
+    """A distributed mesh with a rank without cells (more ranks than the mesh
+    can feed) is an ``InputError`` (collective)."""
+    start, end = dm.getHeightStratum(0)
+    counts = dm.comm.tompi4py().allgather(end - start)
+    if min(counts) == 0:
+        raise InputError(f"the mesh's {sum(counts)} cells cannot feed {len(counts)} ranks (rank "
+                         f"{counts.index(0)} has none): run on fewer ranks, or refine the mesh "
+                         "(-thm_mesh_size, -dm_refine)")
+
+
 def label_boundaries(dm: PETSc.DMPlex, parts: Mapping[str, BoundaryPredicate]) -> None:
     """Create one label per named boundary part, with the closure of its facets.
 

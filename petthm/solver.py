@@ -17,7 +17,7 @@ from typing import Callable
 
 from petsc4py import PETSc
 
-from . import fieldsplit
+from . import compat, fieldsplit
 from .errors import InputError, WriteFailure
 from .fieldsplit import VIFieldSplit  # noqa: F401  (-pc_python_type petthm.solver.VIFieldSplit)
 from .courant import FrontStepLimit
@@ -96,6 +96,36 @@ def propose_defaults(defaults: dict[str, str]) -> None:
         if not opts.hasName(k):
             opts.setValue(k, v)
             PROPOSED.add(k)
+
+
+#: options PETSc reads only at finalize or start-up; never "unused"
+_LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
+                 "memory_view", "log_", "on_error", "no_signal_handler", "fp_trap",
+                 "check_pointer_intensity", "viewer_binary", "history", "options_monitor", "mpi_")
+
+
+#: a solver recipe may set the split of a field the scene does not have
+_RECIPE_SPLITS = tuple(f"{pre}fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam",
+                                                         "rest") for pre in ("", "vi_"))
+
+
+def check_unused_petsc_options() -> None:
+    """Raise InputError naming the first option nothing has read (a misspelling)."""
+    left = [o for o in compat.unused_options()
+            if not o.startswith(_LATE_OPTIONS + _RECIPE_SPLITS) and o not in PROPOSED]
+    if left:
+        raise InputError(f"option -{left[0]} was not used by any solver or petthm component "
+                         "(misspelt, or not valid for this scene)")
+
+
+def drop_unused_proposals() -> None:
+    """Remove the solver options petthm proposed that no solver read (e.g.
+    the direct-solver defaults when a recipe picks another preconditioner),
+    so that PETSc's report of unused options at exit names only the user's."""
+    opts = PETSc.Options()
+    for o in compat.unused_options():
+        if o in PROPOSED:
+            opts.delValue(o)
 
 
 def failure_message(ts: PETSc.TS) -> str:
