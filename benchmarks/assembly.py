@@ -39,11 +39,12 @@ petsc4py.init([sys.argv[0]])
 import numpy as np  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
-from petthm import compat, meshing  # noqa: E402
-from petthm.assembly import Assembler, FieldScale  # noqa: E402
-from petthm.fields import Discretisation, FieldSpec  # noqa: E402
-from petthm.mesh import Mesh, distribute, read_plex  # noqa: E402
-from petthm.model import CellJacobian, CellResidual, Model  # noqa: E402
+from petthm import compat  # noqa: E402
+from petthm.discretisation.assembly import Assembler, FieldScale  # noqa: E402
+from petthm.discretisation.fields import Discretisation, FieldSpec  # noqa: E402
+from petthm.discretisation.model import CellJacobian, CellResidual, Model  # noqa: E402
+from petthm.mesh import generate as meshing  # noqa: E402
+from petthm.mesh.plex import Mesh, distribute, read_plex  # noqa: E402
 
 
 def heat_operator():

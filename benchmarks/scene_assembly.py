@@ -32,7 +32,7 @@ petsc4py.init([sys.argv[0]] + petsc_args)
 import numpy as np  # noqa: E402
 
 from petthm import compat  # noqa: E402
-from petthm.app import Run, make_scene  # noqa: E402
+from petthm.run.driver import Run, make_scene  # noqa: E402
 
 
 def median_ms(f, repeat):

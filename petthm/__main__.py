@@ -12,9 +12,9 @@ def _help_requested(argv):
 
 
 def _scene_help(name):
-    from . import params as P
-    from .scenes import load_all
-    from .scenes.base import REGISTRY
+    from petthm import params as P
+    from petthm.scenes import load_all
+    from petthm.scenes.base import REGISTRY
     load_all()
     cls = REGISTRY[name]
     lines = [f"{name}: {cls.description}", "", "parameters (-option  default  unit  meaning):",
@@ -37,8 +37,8 @@ def _water_help(cls) -> str:
 
 
 def _list_help():
-    from .scenes import load_all
-    from .scenes.base import REGISTRY
+    from petthm.scenes import load_all
+    from petthm.scenes.base import REGISTRY
     load_all()
     lines = [USAGE, "", "scenes:"]
     lines += [f"  {n:<18} {REGISTRY[n].description}" for n in sorted(REGISTRY)]
@@ -149,8 +149,8 @@ def main(argv=None) -> int:
     rest = argv[1:] if scene else argv
     rank = int(os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")))
     if _help_requested(argv):
-        from .scenes import load_all
-        from .scenes.base import REGISTRY
+        from petthm.scenes import load_all
+        from petthm.scenes.base import REGISTRY
         load_all()
         if scene and scene not in REGISTRY:
             return _fail(f"unknown scene '{scene}'; scenes: {', '.join(sorted(REGISTRY))}", rank)
@@ -177,9 +177,9 @@ def main(argv=None) -> int:
         from petsc4py import PETSc  # noqa: F401
     except Exception as e:           # petsc4py.PETSc.Error (the module may not be there to name it)
         return _fail(f"PETSc could not start with these options (error {e})", rank)
-    from .app import run_scene
-    from .errors import InputError, WriteFailure
-    from .scenes import load
+    from petthm.errors import InputError, WriteFailure
+    from petthm.run.driver import run_scene
+    from petthm.scenes import load
     load(scene)
     from petsc4py import PETSc
     try:

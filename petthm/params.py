@@ -16,7 +16,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 from petsc4py import PETSc
 
-from .errors import InputError
+from petthm.errors import InputError
 
 PREFIX = "thm_"
 CELSIUS = 273.15

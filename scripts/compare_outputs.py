@@ -3,7 +3,7 @@
     python scripts/compare_outputs.py RUN_A RUN_B [--tolerance 1e-8]
 
 For every ``fields*.h5`` and ``fracture*.h5`` in both output folders, reads
-the last output on its own mesh (``petthm.output.read_output``), matches the
+the last output on its own mesh (``petthm.io.output.read_output``), matches the
 nodes by their coordinates (the numbering differs between rank counts and
 partitions; the + and - copies of a fracture node share coordinates, so
 their values are compared as sorted pairs) and prints, per field, the
@@ -22,7 +22,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from petthm.output import read_output  # noqa: E402
+from petthm.io.output import read_output  # noqa: E402
 
 
 def by_coordinates(path: str):

@@ -16,9 +16,13 @@ residuals, over/undershoots, bounds violations, the aperture identity; the
 tests compare them with limits of 1e-6 and more) are compared absolutely:
 |a - b| <= ``TOLERANCE_LEVEL``.  A field's difference is max|a - b| / max|a|.
 
+Every case runs with ``-thm_pc_reuse off`` where the tree has it: the
+reuse rule of ``auto`` decides by measured times, so two runs of the same
+code may take different solver paths and differ at the solver's tolerance.
+
 Cases are written with the option names of the older tree; ``RENAMED``
 translates them for a tree that has the option contract of physics.md
-section 12 (``TREE/petthm/materials.py`` present).
+section 12 (``TREE/petthm/physics/materials.py`` present).
 """
 from __future__ import annotations
 
@@ -84,7 +88,7 @@ CASES = [
         "-thm_final_time", 2e6]),
 ]
 
-#: older option name -> the name of physics.md section 12 (trees with petthm/materials.py)
+#: older option name -> the name of physics.md section 12 (trees with petthm/physics/materials.py)
 RENAMED = {
     "-thm_joint_stiffness": "-thm_fracture_normal_stiffness",
     "-thm_joint_aperture": "-thm_fracture_aperture",
@@ -106,8 +110,9 @@ ADDED = {"sneddon_3d": ["-thm_initial_pressure", 3e6]}
 
 #: summary keys that are not results (versions, provenance, and the solver's costs: times,
 #: memory, preconditioner rebuilds, which differ from run to run)
-SKIP = ("petthm_version", "petsc_version", "petsc4py_version", "wall_time", "provenance", "parameters",
-        "options", "git_commit", "reason", "solver_costs", "peak_memory_mb", "pc_rebuilds_forced")
+SKIP = ("petthm_version", "petsc_version", "petsc4py_version", "wall_time", "wall_time_whole_run",
+        "provenance", "parameters", "options", "git_commit", "reason", "solver_costs", "peak_memory_mb",
+        "pc_rebuilds_forced")
 #: magnitudes below this are round-off (in SI units, all of petthm's monitored quantities are larger)
 FLOOR = 1e-11
 #: cases solved iteratively (GMRES + GAMG to the default snes/ksp tolerances of 1e-10): compared at
@@ -120,9 +125,15 @@ TOLERANCE_LEVEL = 1e-10
 
 
 def _translate(tree: str, case: str, opts: list) -> list:
-    if not os.path.exists(os.path.join(tree, "petthm", "materials.py")):
+    if not any(os.path.exists(os.path.join(tree, "petthm", *d, "materials.py")) for d in ((), ("physics",))):
         return list(opts)
     return [RENAMED.get(o, o) if isinstance(o, str) else o for o in opts] + ADDED.get(case, [])
+
+
+def _knows(tree: str, option: str) -> bool:
+    """Whether the tree declares the run-control option -thm_OPTION (in params.py)."""
+    with open(os.path.join(tree, "petthm", "params.py")) as f:
+        return f"    {option}:" in f.read()
 
 
 def run(tree: str, out: str, only: list[str]) -> None:
@@ -132,7 +143,9 @@ def run(tree: str, out: str, only: list[str]) -> None:
         if only and case not in only:
             continue
         d = os.path.join(out, case)
-        replace = ["-thm_overwrite"] if os.path.exists(os.path.join(tree, "petthm", "rundir.py")) else []
+        replace = ["-thm_overwrite"] if any(os.path.exists(os.path.join(tree, "petthm", *d, "rundir.py"))
+                                            for d in ((), ("io",))) else []
+        replace += ["-thm_pc_reuse", "off"] if _knows(tree, "pc_reuse") else []
         cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", d, "-thm_quiet", *replace,
                *map(str, _translate(tree, case, opts))]
         p = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
@@ -197,7 +210,7 @@ def _history(d):
 def _final_fields(d):
     import h5py
 
-    from petthm.output import read_output
+    from petthm.io.output import read_output
     out = {}
     for name in sorted(os.listdir(d)):
         if not name.endswith(".h5") or name == "checkpoint.h5":

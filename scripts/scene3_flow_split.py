@@ -25,9 +25,10 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from petthm.fluid import Viscosity  # noqa: E402
-from petthm.output import read_output  # noqa: E402
 from study_tables import output_with  # noqa: E402
+
+from petthm.io.output import read_output  # noqa: E402
+from petthm.physics.fluid import Viscosity  # noqa: E402
 
 YEAR = 365.25 * 86400.0
 CELSIUS = 273.15

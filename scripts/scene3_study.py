@@ -124,7 +124,7 @@ def statements(rows) -> list[dict]:
 
 # -- figures -----------------------------------------------------------------------------------
 def _series(path):
-    """(geometry, topology, times, {name: [arrays]}) of an output .h5 written by petthm.output."""
+    """(geometry, topology, times, {name: [arrays]}) of an output .h5 written by petthm.io.output."""
     import h5py
     with h5py.File(path) as h5:
         times = np.asarray(h5.attrs["times"])

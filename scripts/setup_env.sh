@@ -61,7 +61,7 @@ for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pyte
 done
 [ -z "$need" ] || $PIP install -q $need
 # numpy 1.25+ sorts int64 with SIMD (AVX-512), which the Jacobian's pattern uses
-# (petthm/radix.py, docs/performance.md); within 1.x, so that the system's
+# (petthm/discretisation/radix.py, docs/performance.md); within 1.x, so that the system's
 # petsc4py, scipy and h5py (built against an older 1.x) keep working
 if old_numpy "$VENV/bin/python"; then $PIP install -q --no-warn-conflicts "numpy>=1.25,<2"; fi
 $PIP install -q --no-deps --no-build-isolation -e .

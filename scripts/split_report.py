@@ -17,9 +17,9 @@ def main(argv=None) -> int:
     petsc4py.init([sys.argv[0]] + argv[1:])
     from petsc4py import PETSc
 
-    from petthm.fracture import FACE_SETS, fracture_vertex_counts, split_fractures, split_statistics
-    from petthm.mesh import distribute, read_plex
-    from petthm.partition import split_count
+    from petthm.mesh.fracture import FACE_SETS, fracture_vertex_counts, split_fractures, split_statistics
+    from petthm.mesh.partition import split_count
+    from petthm.mesh.plex import distribute, read_plex
     dm = read_plex(argv[0], PETSc.COMM_WORLD)
     counts = fracture_vertex_counts(dm)
     comm = dm.comm.tompi4py()

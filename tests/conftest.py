@@ -76,7 +76,8 @@ def ranks_of(mpiexec_pid) -> list[int]:
 def build_problem(tmp_path, scene, **opts):
     """Set up (not run) a scene in this process with -thm_* options; returns its Problem."""
     from petsc4py import PETSc
-    from petthm.app import Run, make_scene
+
+    from petthm.run.driver import Run, make_scene
     o = PETSc.Options()
     for k in list(o.getAll()):
         o.delValue(k)

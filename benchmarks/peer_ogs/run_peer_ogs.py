@@ -12,7 +12,7 @@ b = 1 mm, rate Q = 1e-4 m^2/s, impermeable rock (lambda 2.88 W/m/K, rho 2820,
 c 1170), water (1000 kg/m3, 4200 J/kg/K) injected at 20 degC into rock at
 100 degC, rock W = max(60 m, 4 sqrt(kappa t_end)) on each side, held at
 100 degC on its far sides.  The score is max |T_out - T_Lauwerier| over
-1e4 s <= t <= t_end (K), with petthm.analytic.lauwerier_temperature for both
+1e4 s <= t <= t_end (K), with petthm.verification.analytic.lauwerier_temperature for both
 codes, computed here from each run's outlet history.
 
 OpenGeoSys: the PyPI wheel ``ogs==6.5.9`` is installed into its own virtual
@@ -98,9 +98,9 @@ def schedule(level: int, t_end: float) -> list[float]:
 
 
 def exact_outlet(t, root: Path):
-    """Lauwerier's outlet temperature (degC) from petthm.analytic."""
+    """Lauwerier's outlet temperature (degC) from petthm.verification.analytic."""
     sys.path.insert(0, str(root))
-    from petthm.analytic import lauwerier_temperature
+    from petthm.verification.analytic import lauwerier_temperature
     return lauwerier_temperature(np.array([L]), np.asarray(t, float)[:, None], Q, B, RHO_S * C_S, LAM_S,
                                  RHO_F * C_F, T0, TI)[:, 0]
 

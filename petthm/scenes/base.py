@@ -18,13 +18,13 @@ from typing import Callable
 
 import numpy as np
 
-from .. import params as P
-from ..assembly import FieldScale
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..fracture import TIP_BC
-from ..materials import Parameters
-from ..model import Model
+from petthm import params as P
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import Model
+from petthm.errors import InputError
+from petthm.mesh.fracture import TIP_BC
+from petthm.physics.materials import Parameters
 
 
 @dataclass(frozen=True)
@@ -203,7 +203,7 @@ class Scene:
         scene, before anything is built (an ``InputError`` naming the option
         and the bound): every temperature given where there is water must be
         liquid water at the pressure there (``fluid.check_liquid``)."""
-        from ..fluid import check_liquid
+        from petthm.physics.fluid import check_liquid
         for option, T, p_abs, where in self.water_temperatures():
             check_liquid(option, T, p_abs, where)
 
@@ -218,7 +218,8 @@ class Scene:
         water: initial, injection and boundary temperatures, at the initial
         pressure (-thm_initial_pressure, else ``water_pressure``)."""
         import dataclasses
-        from ..fluid import ATMOSPHERE
+
+        from petthm.physics.fluid import ATMOSPHERE
         if not self.has_water():
             return []
         temps = [f for f in dataclasses.fields(self.p) if f.metadata["unit"] == "degC"]

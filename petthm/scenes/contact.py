@@ -23,19 +23,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..kernels import contact as ct
-from ..kernels import poroelastic as pe
-from ..model import FRACTURE
-from ..monitors import fracture_vertices
-from ..params import MESH, PHYSICS, param
-from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
-                   zero)
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import FRACTURE
+from petthm.errors import InputError
+from petthm.mesh import generate as meshing
+from petthm.params import MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import contact as ct
+from petthm.physics.kernels import poroelastic as pe
+from petthm.physics.monitors import fracture_vertices
+from petthm.scenes.base import (
+    Monitor,
+    Scene,
+    Setup,
+    TimeDefaults,
+    constant,
+    constant_in_time,
+    register,
+    tip_tractions,
+    zero,
+)
 
 #: a vertex counts as open where lam is below this fraction of the stress scale
 OPEN_TRACTION = 1e-9
@@ -67,7 +77,7 @@ def contact_solver_defaults(comm) -> dict:
     """A direct solve with the VI Newton; snes_atol 1e-12: one more Newton
     step (an iterative refinement) where the LU is less accurate than MUMPS
     (PETSc's own LU with reordering)."""
-    from ..solver import direct_solver_defaults
+    from petthm.solvers.timestepper import direct_solver_defaults
     return dict(direct_solver_defaults(comm), snes_type=VI_NEWTON, snes_atol="1e-12")
 
 

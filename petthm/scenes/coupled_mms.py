@@ -3,7 +3,7 @@ every field of Scene 3 at once (u, pm, Tm, pf, Tf, and lam), made with the
 same builders as ``inclined_penny`` (Biot with thermal strain, the contact
 face loads, the deformable aperture, the cubic law with da/dt, leakoff by
 the tie pm = pf, the equilibrium wall exchange Tm = Tf, mu(T), advection
-with SUPG), plus the manufactured sources of ``petthm.manufactured``.
+with SUPG), plus the manufactured sources of ``petthm.verification.manufactured``.
 
 * ``coupled_mms``: the unit square or cube cut by the fracture zeta = 1/2
   (no tips); ``-thm_coupled_mms_state open`` (opening w >= 0.05, lam = 0,
@@ -22,19 +22,20 @@ from functools import partial
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..kernels import poroelastic as pe
-from ..manufactured import HALVES, Amplitudes, Coefficients, CoupledSolution
-from ..model import FRACTURE, MATRIX, CellResidual, Side, Trace
-from ..params import DISCRETISATION, MESH, PHYSICS, param
-from ..recipes import flow_heat_first_recipe
-from .base import Monitor, Scene, Setup, TimeDefaults, face, on_sides, register
-from .contact import contact_block_recipe, contact_solver_defaults
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import FRACTURE, MATRIX, CellResidual, Side, Trace
+from petthm.errors import InputError
+from petthm.mesh import generate as meshing
+from petthm.params import DISCRETISATION, MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import poroelastic as pe
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, face, on_sides, register
+from petthm.scenes.contact import contact_block_recipe, contact_solver_defaults
+from petthm.solvers.recipes import flow_heat_first_recipe
+from petthm.verification.manufactured import HALVES, Amplitudes, Coefficients, CoupledSolution
 
 MATRIX_FIELDS = ("u", "pm", "Tm")
 FRACTURE_FIELDS = ("pf", "Tf")

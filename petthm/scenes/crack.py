@@ -13,20 +13,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..kernels import contact as ct
-from ..model import FRACTURE
-from ..monitors import fracture_vertices
-from ..params import MESH, PHYSICS, param, with_defaults
-from ..recipes import SSLS_CRACK_GAMG, glued
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
-from .contact import (OPEN_TRACTION, contact_solver_defaults, crack_half_model, fracture_normal,
-                      mechanics_model)
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import FRACTURE
+from petthm.errors import InputError
+from petthm.params import MESH, PHYSICS, param, with_defaults
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import contact as ct
+from petthm.physics.monitors import fracture_vertices
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
+from petthm.scenes.contact import (
+    OPEN_TRACTION,
+    contact_solver_defaults,
+    crack_half_model,
+    fracture_normal,
+    mechanics_model,
+)
+from petthm.solvers.recipes import SSLS_CRACK_GAMG, glued
 
 
 # -- partial_opening ---------------------------------------------------------------------
@@ -200,7 +205,7 @@ class FractureInflation(_CrackScene):
     history_columns = ("injection_pressure", "opening_centre", "nodes_open", "volume_balance")
 
     def build(self, mesh, degree):
-        from ..kernels import wells
+        from petthm.physics.kernels import wells
         p = self.p
         if mesh.dim != 2:
             raise InputError("fracture_inflation is a 2D scene (the mesh is 3D)")

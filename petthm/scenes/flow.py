@@ -15,19 +15,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..fracture import FRACTURE_BC, TIP_BC
-from ..model import MATRIX, Domain
-from ..monitors import FractureWells, Worst, hit
-from ..params import MESH, PHYSICS, param
-from ..solver import direct_solver_defaults
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
-from .fractured import (balances_of, far_sides, rate_pressure_scale, rigid_fracture_physics,
-                        strip_with_fracture)
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import MATRIX, Domain
+from petthm.mesh import generate as meshing
+from petthm.mesh.fracture import FRACTURE_BC, TIP_BC
+from petthm.params import MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.monitors import FractureWells, Worst, hit
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
+from petthm.scenes.fractured import (
+    balances_of,
+    far_sides,
+    rate_pressure_scale,
+    rigid_fracture_physics,
+    strip_with_fracture,
+)
+from petthm.solvers.timestepper import direct_solver_defaults
 
 
 # -- fracture_flow_patch ------------------------------------------------------------------

@@ -16,14 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing
-from ..builders import ModelBuilder
-from ..monitors import Balances, FractureWells, TemperatureRange, Worst, fracture_balances
-from ..params import CELSIUS, MESH, param
-from ..errors import InputError
-from .base import Monitor
-
+from petthm.errors import InputError
+from petthm.mesh import generate as meshing
+from petthm.params import CELSIUS, MESH, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.monitors import Balances, FractureWells, TemperatureRange, Worst, fracture_balances
+from petthm.scenes.base import Monitor
 
 #: ``auto`` first rock layer of a layered mesh: this fraction of the rock's
 #: diffusion length sqrt(kappa t) at the scene's first output time (issue 16 item 2)

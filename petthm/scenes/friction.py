@@ -31,17 +31,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..kernels import poroelastic as pe
-from ..kernels.friction import tangent_basis
-from ..monitors import contact_node_fields
-from ..params import MESH, PHYSICS, param
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions
-from .contact import contact_solver_defaults, fracture_normal, mechanics_model
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.errors import InputError
+from petthm.mesh import generate as meshing
+from petthm.params import MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.kernels import poroelastic as pe
+from petthm.physics.kernels.friction import tangent_basis
+from petthm.physics.monitors import contact_node_fields
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions
+from petthm.scenes.contact import contact_solver_defaults, fracture_normal, mechanics_model
 
 
 @dataclass(frozen=True)
@@ -335,7 +336,7 @@ class InclinedCrack(_CoulombScene):
                                           origin=(0.0, -L, -L))
 
     def build(self, mesh, degree):
-        from ..builders import ModelBuilder
+        from petthm.physics.builders import ModelBuilder
         p, d = self.p, self.dim
         if mesh.dim != d:
             raise InputError(f"option -thm_inclined_dim = {d} but the mesh is {mesh.dim}D")

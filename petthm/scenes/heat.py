@@ -21,16 +21,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..kernels import heat as hk
-from ..model import MATRIX
-from ..params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
-from ..solver import direct_solver_defaults
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, face, register
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import MATRIX
+from petthm.mesh import generate as meshing
+from petthm.params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import heat as hk
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, face, register
+from petthm.solvers.timestepper import direct_solver_defaults
 
 FIELD = "Tm"
 ROCK_AND_FLUID_HEAT = mt.ROCK_HEAT + ("rock_porosity",) + mt.FLUID_HEAT
@@ -212,7 +213,7 @@ class HeatErfc(Scene):
         z = x[..., 0]
         if t <= 0:
             return np.full(z.shape, T0)
-        from ..analytic import erfc
+        from petthm.verification.analytic import erfc
         return T0 + (Ts - T0) * erfc(z / (2 * np.sqrt(kappa * t)))
 
     def build(self, mesh, degree):

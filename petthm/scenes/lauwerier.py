@@ -9,21 +9,32 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..analytic import lauwerier_temperature
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..kernels import wells as wl
-from ..monitors import FractureWells, hit
-from ..params import CELSIUS, MESH, PHYSICS, param
-from ..solver import direct_solver_defaults
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
-from .fractured import (SCENE1_WELLS, FirstLayer, WellsMonitor, far_sides, first_layer, first_layer_param,
-                        heat_wells_monitor, rate_pressure_scale, rigid_fracture_physics, strip_with_fracture,
-                        transmissivity)
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.errors import InputError
+from petthm.mesh import generate as meshing
+from petthm.params import CELSIUS, MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import wells as wl
+from petthm.physics.monitors import FractureWells, hit
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
+from petthm.scenes.fractured import (
+    SCENE1_WELLS,
+    FirstLayer,
+    WellsMonitor,
+    far_sides,
+    first_layer,
+    first_layer_param,
+    heat_wells_monitor,
+    rate_pressure_scale,
+    rigid_fracture_physics,
+    strip_with_fracture,
+    transmissivity,
+)
+from petthm.solvers.timestepper import direct_solver_defaults
+from petthm.verification.analytic import lauwerier_temperature
 
 
 @dataclass(frozen=True)

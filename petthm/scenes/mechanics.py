@@ -13,17 +13,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..kernels import poroelastic as pe
-from ..model import MATRIX
-from ..monitors import hit
-from ..params import CELSIUS, MESH, param
-from ..solver import direct_solver_defaults
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, zero
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import MATRIX
+from petthm.mesh import generate as meshing
+from petthm.params import CELSIUS, MESH, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import poroelastic as pe
+from petthm.physics.monitors import hit
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, zero
+from petthm.solvers.timestepper import direct_solver_defaults
 
 
 # ---------------------------------------------------------------------------------
@@ -172,7 +173,7 @@ class ThermalStress(Scene):
         return p.rock_conductivity / (p.rock_density * p.rock_heat_capacity)
 
     def dT_exact(self, x, t):
-        from ..analytic import erfc
+        from petthm.verification.analytic import erfc
         p = self.p
         dTs = p.surface_temperature - p.initial_temperature
         return dTs * erfc(x[..., 0] / (2 * np.sqrt(self.kappa() * t))) if t > 0 else 0.0 * x[..., 0]

@@ -13,20 +13,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..analytic import series_sum
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..kernels import poroelastic as pe
-from ..model import MATRIX
-from ..monitors import hit
-from ..params import DISCRETISATION, MESH, PHYSICS, param
-from ..recipes import PMG_P1_NOT_AGGRESSIVE, glued
-from ..solver import direct_solver_defaults
-from .base import Monitor, Scene, Setup, TimeDefaults, register, zero
-
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import MATRIX
+from petthm.mesh import generate as meshing
+from petthm.params import DISCRETISATION, MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import poroelastic as pe
+from petthm.physics.monitors import hit
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, register, zero
+from petthm.solvers.recipes import PMG_P1_NOT_AGGRESSIVE, glued
+from petthm.solvers.timestepper import direct_solver_defaults
+from petthm.verification.analytic import series_sum
 
 #: the poroelastic rock and fluid (verification.md rock set R)
 POROUS_ROCK = mt.group("Poroelastic rock and fluid", mt.ELASTIC + (
@@ -323,7 +323,7 @@ class Mandel(Scene):
     def roots(self, n=200):
         """The first n roots of tan(x) = k x, k = (1 - nu)/(nu_u - nu) > 1: one
         in each (i pi, i pi + pi/2), where tan x - k x goes from < 0 to +inf."""
-        from ..analytic import increasing_root
+        from petthm.verification.analytic import increasing_root
         B, nu, nu_u, G, c = self._constants()
         k = (1 - nu) / (nu_u - nu)
         i = np.arange(n)

@@ -14,22 +14,34 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..kernels import wells as wl
-from ..monitors import Balances, FractureWells, Worst, hit
-from ..output import on_root
-from ..params import CELSIUS, MESH, PHYSICS, param
-from ..solver import direct_solver_defaults
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
-from .fractured import (SCENE1_WELLS, FirstLayer, WellsMonitor, balances_of, far_sides, first_layer,
-                        first_layer_param, heat_wells_monitor, rate_pressure_scale, rigid_fracture_physics,
-                        strip_with_fracture, transmissivity)
-from .lauwerier import SCENE1_ROCK
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.errors import InputError
+from petthm.io.output import on_root
+from petthm.mesh import generate as meshing
+from petthm.params import CELSIUS, MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels import wells as wl
+from petthm.physics.monitors import Balances, FractureWells, Worst, hit
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
+from petthm.scenes.fractured import (
+    SCENE1_WELLS,
+    FirstLayer,
+    WellsMonitor,
+    balances_of,
+    far_sides,
+    first_layer,
+    first_layer_param,
+    heat_wells_monitor,
+    rate_pressure_scale,
+    rigid_fracture_physics,
+    strip_with_fracture,
+    transmissivity,
+)
+from petthm.scenes.lauwerier import SCENE1_ROCK
+from petthm.solvers.timestepper import direct_solver_defaults
 
 FRACTURE_HEAT = mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT)
 
@@ -243,7 +255,7 @@ class LeakoffHeat(Scene):
         return vL * p.fluid_viscosity.value * p.leakoff_heat_width / p.isotropic_permeability()
 
     def exact_outlet(self, t):
-        from ..analytic import leakoff_outlet_temperature
+        from petthm.verification.analytic import leakoff_outlet_temperature
         p = self.p
         return leakoff_outlet_temperature(
             p.leakoff_heat_length, t, q0=p.injection_rate, m=p.leakoff_fraction, L=p.leakoff_heat_length,

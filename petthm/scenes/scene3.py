@@ -10,7 +10,7 @@ fracture in a permeable, thermo-poro-elastic rock with matrix wells.
   vertical injector and producer 300 m apart on the strike line through the
   centre, their lowest 20 m perforated just above the fracture (not
   connected to it: ``-thm_scene3_well_standoff``), inject and produce
-  0.005 m3/s (``petthm.matrixwells``).  ``-thm_scene3_case`` 1|2|3 sets
+  0.005 m3/s (``petthm.physics.matrixwells``).  ``-thm_scene3_case`` 1|2|3 sets
   the defaults of T0 and the in-situ stress (the paper's three cases).
 
 The box [-L, L]^3 (L = ``-thm_scene3_box`` R) has rollers on its faces
@@ -24,23 +24,41 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import layeredmesh, meshing, probes
-from .. import params as P
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..materials import Parameters
-from ..matrixwells import MatrixWells, Perforation
-from ..mesh import Interior
-from ..monitors import Worst, contact_node_checks, contact_node_fields
-from ..params import DISCRETISATION, MESH, PHYSICS, param
-from ..recipes import flow_heat_first_recipe
-from .base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions
-from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
-from .fractured import ClosedUnderStress, FirstLayer, balances_of, first_layer, first_layer_param, tf_range
-from .friction import slip_columns
+from petthm import params as P
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.errors import InputError
+from petthm.mesh import generate as meshing
+from petthm.mesh import layered as layeredmesh
+from petthm.mesh.plex import Interior
+from petthm.params import DISCRETISATION, MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.materials import Parameters
+from petthm.physics.matrixwells import MatrixWells, Perforation
+from petthm.physics.monitors import Worst, contact_node_checks, contact_node_fields
+from petthm.scenes.base import (
+    Monitor,
+    Scene,
+    Setup,
+    TimeDefaults,
+    constant,
+    constant_in_time,
+    register,
+    tip_tractions,
+)
+from petthm.scenes.contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
+from petthm.scenes.fractured import (
+    ClosedUnderStress,
+    FirstLayer,
+    balances_of,
+    first_layer,
+    first_layer_param,
+    tf_range,
+)
+from petthm.scenes.friction import slip_columns
+from petthm.solvers.recipes import flow_heat_first_recipe
 
 #: (T0 in degC, compressive in-situ stress in Pa) of the paper's cases 1, 2, 3
 CASES = {1: (80.0, 60e6), 2: (250.0, 60e6), 3: (250.0, 75e6)}

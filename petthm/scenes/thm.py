@@ -22,23 +22,46 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials as mt
-from .. import meshing, probes
-from ..assembly import FieldScale
-from ..builders import ModelBuilder
-from ..constraints import Dirichlet
-from ..errors import InputError
-from ..fields import Domain
-from ..monitors import FractureWells, contact_node_checks, fracture_vertices
-from ..output import on_root
-from ..params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
-from ..recipes import closed_fracture_recipe
-from .base import (Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, tip_tractions,
-                   zero)
-from .contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults, fracture_normal
-from .fractured import (ClosedUnderStress, FirstLayer, WellsMonitor, first_layer, first_layer_param,
-                        heat_wells_monitor, rate_pressure_scale, transmissivity)
-from .friction import slip_columns
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.fields import Domain
+from petthm.errors import InputError
+from petthm.io.output import on_root
+from petthm.mesh import generate as meshing
+from petthm.params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.physics.monitors import FractureWells, contact_node_checks, fracture_vertices
+from petthm.scenes.base import (
+    Monitor,
+    Scene,
+    Setup,
+    TimeDefaults,
+    constant,
+    constant_in_time,
+    register,
+    tip_tractions,
+    zero,
+)
+from petthm.scenes.contact import (
+    OPEN_TRACTION,
+    contact_block_recipe,
+    contact_solver_defaults,
+    fracture_normal,
+)
+from petthm.scenes.fractured import (
+    ClosedUnderStress,
+    FirstLayer,
+    WellsMonitor,
+    first_layer,
+    first_layer_param,
+    heat_wells_monitor,
+    rate_pressure_scale,
+    transmissivity,
+)
+from petthm.scenes.friction import slip_columns
+from petthm.solvers.recipes import closed_fracture_recipe
 
 
 @dataclass(frozen=True)

@@ -154,7 +154,7 @@ def test_progress_estimate_counts_the_geometric_steps():
     """Issue 15: the steps left after step 1 of a geometric schedule (Scene
     2: 1e3 s, x1.2, at most 2e7 s, to 1e9 s) are counted, not taken from
     the simulated-time fraction (which overestimated the wall time 1e4x)."""
-    from petthm.solver import StepControl
+    from petthm.solvers.timestepper import StepControl
     c = StepControl(final_time=1e9, dt_initial=1e3, growth=1.2, dt_max=2e7)
     t, dt, n = 1e3, 1e3, 0
     while t < c.final_time * (1 - 1e-12):
@@ -172,7 +172,7 @@ def test_a_collapsed_time_step_is_a_failure():
     of going on for ever on such steps (seen: friction_patch, steps of
     1e-11 s in a 1 s run); the last step, clipped to the end time, may be
     short."""
-    from petthm.solver import StepControl
+    from petthm.solvers.timestepper import StepControl
     c = StepControl(final_time=1.0, dt_initial=0.2)
     assert c.dt_floor() == pytest.approx(1e-10)
     assert c.collapsed(1e-11, 0.5) and not c.collapsed(1e-9, 0.5)
@@ -217,7 +217,7 @@ class _ScheduleTS:
 def _steps(control, cuts, n, start=0.0, dt=None):
     """The steps of ``n`` accepted steps from ``start`` (a restart's time and
     step ``dt``; default: the run's start) under ``control``."""
-    from petthm.solver import TimeStepper
+    from petthm.solvers.timestepper import TimeStepper
     stepper = TimeStepper.__new__(TimeStepper)          # the schedule alone, without a problem
     stepper._start_schedule(control, control.dt_initial)
     stepper._user_monitor = None
@@ -238,7 +238,7 @@ def test_a_step_cut_by_rejections_grows_back_to_the_schedule(growth):
     step) to where the schedule would be, in a constant schedule (it used
     to stay cut for the rest of the run) and a geometric one (it used to
     grow back at x1.1); without rejections the schedule is unchanged."""
-    from petthm.solver import StepControl
+    from petthm.solvers.timestepper import StepControl
     c = StepControl(final_time=1e9, dt_initial=1.0, growth=growth, dt_max=5.0)
     plain = _steps(c, {}, 30)
     assert np.allclose(plain, np.minimum(growth ** np.arange(30), 5.0))
@@ -256,7 +256,7 @@ def test_a_hit_time_is_reached_without_a_sliver_step():
     the long steps), and the growth restarted from the sliver at x1.1 (68
     steps back to 0.2 years); in a constant schedule the step stayed cut for
     the rest of the run."""
-    from petthm.solver import StepControl
+    from petthm.solvers.timestepper import StepControl
     c = StepControl(final_time=100.0, dt_initial=10.0, growth=1.0, dt_max=10.0, hit_times=(31.0,))
     plain = _steps(c, {}, 11)
     print("steps", plain)
@@ -295,7 +295,8 @@ def test_fewest_cells_is_a_lower_bound(dim, size):
     square or cube at that largest size (measured: 161 against 1140
     tetrahedra at 0.25)."""
     import gmsh
-    from petthm.meshing import fewest_cells
+
+    from petthm.mesh.generate import fewest_cells
     gmsh.initialize(["gmsh"], readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)

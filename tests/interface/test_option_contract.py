@@ -117,7 +117,8 @@ def test_initial_temperature(tmp_path, scene, opts, column):
 
 def test_no_scene_declares_an_option_twice():
     """Each -thm_ option of every scene is declared once (one type, one help)."""
-    from petthm import materials, params
+    from petthm import params
+    from petthm.physics import materials
     from petthm.scenes import load_all
     from petthm.scenes.base import REGISTRY
     load_all()
@@ -137,6 +138,7 @@ def test_each_scene_loads_from_its_module_alone():
     both ways."""
     import subprocess
     import sys
+
     from petthm import scenes
     from petthm.scenes.base import REGISTRY
     scenes.load_all()

@@ -14,9 +14,8 @@ import h5py
 import numpy as np
 import pytest
 
-from petthm.output import read_output
-
 from conftest import MPI_ENV, ROOT, checkpoint_state, ranks_of, run_petthm, solver_without_parallel_direct
+from petthm.io.output import read_output
 
 #: a coarse lauwerier (128 steps in ~2 s): what is tested is the restart, not the resolution
 LAUWERIER = ("lauwerier", ("-thm_mesh_size", 20, "-thm_lauwerier_fracture_size", 5, "-thm_final_time", 1e6))

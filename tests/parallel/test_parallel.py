@@ -2,9 +2,8 @@
 import numpy as np
 import pytest
 
-from petthm.output import read_output
-
 from conftest import ROOT, run_petthm, solver_without_parallel_direct
+from petthm.io.output import read_output
 
 TIGHT = ("-ksp_rtol", "1e-13", "-ksp_atol", "1e-15", "-snes_rtol", "1e-10", "-snes_atol", "1e-10")
 
@@ -180,6 +179,7 @@ def test_monitor_failure_on_one_rank_stops_every_rank(tmp_path):
     import os
     import subprocess
     import sys
+
     from conftest import MPI_ENV, ROOT
     script = os.path.join(ROOT, "tests", "parallel", "fault_monitor.py")
     env = dict(os.environ, **MPI_ENV, PYTHONPATH=os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")]))

@@ -17,7 +17,8 @@ import sys
 
 def _kill_in_checkpoint(n: int) -> None:
     import h5py
-    from petthm import checkpoint
+
+    from petthm.io import checkpoint
     original, calls = checkpoint.in_turns, [0]
 
     def in_turns(comm, write, path=""):
@@ -32,7 +33,7 @@ def _kill_in_checkpoint(n: int) -> None:
 
 
 def _no_space(n: int) -> None:
-    from petthm import output
+    from petthm.io import output
     original, calls = output.os.statvfs, [0]
 
     class Full:
@@ -47,6 +48,7 @@ def _no_space(n: int) -> None:
 if __name__ == "__main__":
     mode, n, args = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
     import petsc4py
+
     from petthm.__main__ import isolate_singleton, main
     isolate_singleton()
     petsc4py.init([sys.argv[0]] + args[1:])          # what main does, before the patches import PETSc

@@ -23,6 +23,7 @@ def test_an_options_file_given_without_its_option_is_an_error(tmp_path):
     import os
     import subprocess
     import sys
+
     from conftest import MPI_ENV
     (tmp_path / "my.opts").write_text("-thm_final_time 10\n")
     proc = subprocess.run([sys.executable, "-m", "petthm", "heat_erfc", "my.opts"], cwd=tmp_path,
@@ -105,7 +106,8 @@ def test_water_that_is_not_liquid_is_refused(tmp_path, scene, args, words):
 def test_the_paper_scenes_water_is_liquid(tmp_path):
     """Scene 3's case 2 (250 degC at 20 MPa) passes the check."""
     from petsc4py import PETSc
-    from petthm.app import make_scene
+
+    from petthm.run.driver import make_scene
     opts = PETSc.Options()
     for case in (1, 2, 3):
         opts.setValue("thm_scene3_case", case)
@@ -125,7 +127,7 @@ def test_lengths_that_do_not_fit_the_domain_are_refused(tmp_path, args, words):
 
 
 def test_read_output_takes_the_xdmf_or_the_h5_and_names_a_file_it_cannot_read(tmp_path):
-    from petthm.output import read_output
+    from petthm.io.output import read_output
     run_petthm(LAUWERIER[0], tmp_path / "run", *LAUWERIER[1:])
     a = read_output(str(tmp_path / "run" / "fields.xdmf"))
     b = read_output(str(tmp_path / "run" / "fields.h5"))

@@ -12,7 +12,7 @@ import time
 
 from petsc4py import PETSc
 
-from conftest import LAUWERIER_COARSE, folder_digests, MPI_ENV, ROOT, run_petthm
+from conftest import LAUWERIER_COARSE, MPI_ENV, ROOT, folder_digests, run_petthm
 
 ERFC = ("heat_erfc", "-thm_final_time", 1e3)
 LAUWERIER = (*LAUWERIER_COARSE, "-thm_final_time", 1e6)
@@ -122,7 +122,7 @@ def test_a_killed_run_leaves_no_stale_lock(tmp_path):
 
 
 def test_a_file_system_without_locks_is_named_once_and_the_run_goes_on(tmp_path, monkeypatch):
-    from petthm.rundir import RunFolder
+    from petthm.io.rundir import RunFolder
 
     def no_locks(f, how):
         raise OSError(37, "No locks available")

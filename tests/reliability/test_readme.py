@@ -54,6 +54,7 @@ NO_REFERENCE = {"rigid_fracture", "penny_impermeable", "inclined_penny", "partia
 @pytest.mark.parametrize("scene", sorted(PRINTS_ERRORS))
 def test_every_verification_scene_prints_its_errors_at_the_end(tmp_path, scene):
     from test_restart_consistency import WHOLE_RUN
+
     from petthm.scenes import load_all
     from petthm.scenes.base import REGISTRY
     load_all()

@@ -207,7 +207,7 @@ def test_ssls_crack_takes_a_gamg_threshold(tmp_path):
 def test_the_recipe_file_is_the_size_default():
     """options/solvers/block.opts and the recipe petthm proposes above
     -thm_direct_max_unknowns are the same options."""
-    from petthm.recipes import BLOCK_RECIPE
+    from petthm.solvers.recipes import BLOCK_RECIPE
     opts = {}
     for line in open(f"{ROOT}/options/solvers/block.opts"):
         line = line.split("#")[0].split()
@@ -238,12 +238,13 @@ def test_a_scene_changes_the_block_recipe():
     """Above the size threshold the scene's changes go over BLOCK_RECIPE
     (Scene 3: the flow and heat fields as one split, first); below it nothing of the recipe is
     proposed."""
-    from petthm.scenes import load
-    from petthm.scenes.base import REGISTRY
-    from petthm.recipes import BLOCK_RECIPE, solver_defaults_by_size
     from types import SimpleNamespace
 
     from petsc4py import PETSc
+
+    from petthm.scenes import load
+    from petthm.scenes.base import REGISTRY
+    from petthm.solvers.recipes import BLOCK_RECIPE, solver_defaults_by_size
 
     def recipe_of(scene, degree, snes_type="vinewtonrsls"):
         return REGISTRY[scene].block_recipe(SimpleNamespace(run=SimpleNamespace(fe_degree=degree)), snes_type)
@@ -340,7 +341,7 @@ def test_coupled_mms_takes_the_flow_and_heat_split(tmp_path):
     five splits each by its AMG cycle, needs many times more (at 60 k
     unknowns every linear solve stopped at 500 iterations; docs/solvers.md,
     stop 45)."""
-    from petthm.recipes import BLOCK_RECIPE
+    from petthm.solvers.recipes import BLOCK_RECIPE
     common = ("-thm_coupled_mms_dim", 3, "-thm_fe_degree", 1, "-thm_coupled_mms_supg", 1,
               "-thm_mesh_size", 0.12, "-thm_final_time", 0.5, "-thm_direct_max_unknowns", 0)
     its = largest_krylov_per_newton(tmp_path, "coupled_mms", common,

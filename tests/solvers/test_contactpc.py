@@ -1,4 +1,4 @@
-"""The null-space preconditioner of the closed contact (petthm.contactpc):
+"""The null-space preconditioner of the closed contact (petthm.solvers.contactpc):
 its Krylov count does not grow with the crack mesh when the glued
 elasticity is solved exactly, and stays small with one GAMG V-cycle."""
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 from petsc4py import PETSc
 
 from conftest import build_problem
-from petthm.contactpc import ContactNullspacePC
-from petthm.fieldsplit import SolverContext, serve
+from petthm.solvers.contactpc import ContactNullspacePC
+from petthm.solvers.fieldsplit import SolverContext, serve
 
 
 def closed_jacobian(tmp_path, crack_size):
@@ -109,7 +109,7 @@ def test_sticking_nodes_are_glued_whole(tmp_path, inner, limit):
 def test_the_pc_needs_the_tangential_glue(tmp_path, monkeypatch):
     """Negative control: with the sticking tau rows eliminated instead of
     glued (as the open rows are) the exact-solve count is far worse."""
-    import petthm.contactpc as contactpc
+    import petthm.solvers.contactpc as contactpc
     original = contactpc.glue_maps
 
     def normal_glue_only(K, structure, rows):

@@ -15,7 +15,7 @@ def test_rigid_body_modes_are_orthonormal_and_complete(tmp_path):
     """2D: 3 modes, 3D: 6, orthonormal; on the u unknowns only (rollers drop components)."""
     for scene, dim, opts in (("terzaghi", 2, {}), ("contact_patch", 3, dict(thm_contact_dim=3))):
         problem = build_problem(tmp_path / scene, scene, **opts)
-        from petthm.fieldsplit import SolverContext, field_splits
+        from petthm.solvers.fieldsplit import SolverContext, field_splits
         splits = {s.name: s.iset for s in field_splits(SolverContext(problem))}
         nsp = splits["u"].query("nearnullspace")
         vecs = nsp.getVecs()
@@ -188,7 +188,8 @@ def _schur_terms(tmp_path, monkeypatch, groups):
     groups``: the splits that were given a Schur-complement block
     (``fieldsplit.split_block``, composed as their preconditioning matrix)."""
     from petsc4py import PETSc
-    from petthm import fieldsplit
+
+    from petthm.solvers import fieldsplit
     opts = dict(zip(SCENE2_COARSE[::2], SCENE2_COARSE[1::2]))
     problem = build_problem(tmp_path, "penny_impermeable", **{k[1:]: v for k, v in opts.items()})
     J = problem.create_matrix()

@@ -3,7 +3,7 @@ the lower blocks only is PETSc's multiplicative PCFIELDSPLIT to round-off."""
 import numpy as np
 from petsc4py import PETSc
 
-from petthm.sweep import LowerSweep
+from petthm.solvers.sweep import LowerSweep
 
 
 def _matrix(n: int, seed: int = 3) -> PETSc.Mat:

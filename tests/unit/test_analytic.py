@@ -1,4 +1,4 @@
-"""The numerical pieces of ``petthm.analytic`` that stand in for scipy on a
+"""The numerical pieces of ``petthm.verification.analytic`` that stand in for scipy on a
 small run's start-up path: ``erfc`` (the C library's) and the vectorised
 bisection ``increasing_root`` (Mandel's roots), each against scipy."""
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import erfc as scipy_erfc
 
-from petthm.analytic import erfc, increasing_root, series_sum
+from petthm.verification.analytic import erfc, increasing_root, series_sum
 
 
 def test_erfc_is_scipys_to_round_off():

@@ -1,20 +1,21 @@
-"""Model builders (petthm.builders): a coupled model composed with no scene
+"""Model builders (petthm.physics.builders): a coupled model composed with no scene
 code; the thermo-mechanical heating of physics.md section 6 switched on in
 a Biot (u, pm, Tm) model by the option alone, its blocks exact."""
 import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from petthm import materials as mt
-from petthm import meshing, params
-from petthm.assembly import FieldScale
-from petthm.builders import ModelBuilder
-from petthm.constraints import Dirichlet, boundary_entries
-from petthm.fields import Discretisation
-from petthm.mesh import Mesh, distribute, label_boundaries, read_plex
-from petthm.model import MATRIX
-from petthm.problem import Problem
-from petthm.verify import jacobian_fd_block_errors
+from petthm import params
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet, boundary_entries
+from petthm.discretisation.fields import Discretisation
+from petthm.discretisation.model import MATRIX
+from petthm.discretisation.problem import Problem
+from petthm.mesh import generate as meshing
+from petthm.mesh.plex import Mesh, distribute, label_boundaries, read_plex
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.verification.jacobian import jacobian_fd_block_errors
 
 THM_ROCK = mt.group("Thermo-poro-elastic rock", mt.ELASTIC + mt.ROCK_HEAT + mt.FLUID_HEAT + mt.FLUID_FLOW + (
     "rock_biot_coefficient", "rock_porosity", "rock_permeability", "rock_thermal_expansion",

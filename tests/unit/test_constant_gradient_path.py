@@ -5,7 +5,7 @@ gradient terms summed over the cell")."""
 import numpy as np
 import pytest
 
-from petthm.assembly import Assembler
+from petthm.discretisation.assembly import Assembler
 
 
 @pytest.mark.parametrize("scene,opts", [

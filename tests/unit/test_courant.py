@@ -2,10 +2,10 @@
 step limit it sets (``-thm_dt_courant``)."""
 import numpy as np
 import pytest
-from conftest import build_problem, run_petthm
 
-from petthm.courant import FRONT, front_courant
-from petthm.fields import Domain
+from conftest import build_problem, run_petthm
+from petthm.discretisation.fields import Domain
+from petthm.solvers.courant import FRONT, front_courant
 
 T0 = 373.15
 

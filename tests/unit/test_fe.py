@@ -5,7 +5,7 @@ from math import factorial
 import numpy as np
 import pytest
 
-from petthm import fe
+from petthm.discretisation import fe
 
 
 @pytest.mark.parametrize("dim", [1, 2, 3])

@@ -4,13 +4,14 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from petthm import fracture as F, meshing as M
-from petthm.assembly import FieldScale
-from petthm.fields import Discretisation, FieldSpec
-from petthm.mesh import Mesh, distribute, label_boundaries, read_plex
-from petthm.constraints import Dirichlet
-from petthm.model import FRACTURE, CellJacobian, CellResidual, Domain, Model
-from petthm.problem import Problem
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.fields import Discretisation, FieldSpec
+from petthm.discretisation.model import FRACTURE, CellJacobian, CellResidual, Domain, Model
+from petthm.discretisation.problem import Problem
+from petthm.mesh import fracture as F
+from petthm.mesh import generate as M
+from petthm.mesh.plex import Mesh, distribute, label_boundaries, read_plex
 
 
 def _fracture_problem(path, dim, degree, exact, source=0.0):
@@ -107,6 +108,7 @@ def test_fracture_field_in_parallel(tmp_path, dim):
     import os
     import subprocess
     import sys
+
     from conftest import MPI_ENV, ROOT
     fr = [M.Fracture("segment", p0=(0.0, 0.5), p1=(1.0, 0.5))] if dim == 2 else \
         [M.Fracture("rectangle", center=(0.5, 0.5, 0.5), half=(0.5, 0.3))]
@@ -132,7 +134,7 @@ def test_same_points_matches_copies_exactly_and_near_ones_within_the_tolerance()
     """A tied node finds the row with its coordinates: bit-equal copies (also
     -0.0 against 0.0) by the sort, rows off by less than the tolerance by the
     k-d tree, a row farther than it nowhere (-1)."""
-    from petthm.fields import same_points
+    from petthm.discretisation.fields import same_points
     rng = np.random.default_rng(0)
     ref = rng.random((500, 3))
     rows = rng.permutation(500)[:200]

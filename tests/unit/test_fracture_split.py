@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import MPI_ENV, ROOT
-from petthm import meshing as M
+from petthm.mesh import generate as M
 
 MESHES = {
     "line2d": ([1, 1], 0.1, [M.Fracture("segment", p0=(0.25, 0.5), p1=(0.75, 0.5))]),
@@ -92,9 +92,9 @@ def test_partition_groups_cohesive_cells_with_their_rock(meshes):
     import numpy as np
     from petsc4py import PETSc
 
-    from petthm import partition
-    from petthm.fracture import split_fractures
-    from petthm.mesh import read_plex
+    from petthm.mesh import partition
+    from petthm.mesh.fracture import split_fractures
+    from petthm.mesh.plex import read_plex
     dm, _ = split_fractures(read_plex(meshes["disc3d"], PETSc.COMM_SELF))
     coh, rock = partition.cohesive_neighbours(dm)
     assert len(coh) and (rock >= 0).all()
@@ -112,16 +112,16 @@ def _heat_on(path, split):
     """Cool the bottom of a square for 1e6 s; returns node y and T (K)."""
     import numpy as np
     from petsc4py import PETSc
-    from petthm import fracture as F
-    from petthm.assembly import FieldScale
-    from petthm.fields import Discretisation
-    from petthm.constraints import Dirichlet
-    from petthm.fields import FieldSpec
-    from petthm.kernels import heat
-    from petthm.mesh import Mesh, distribute, label_boundaries, read_plex
-    from petthm.model import Domain, Model
-    from petthm.problem import Problem
-    from petthm.solver import SOLVER_DEFAULTS, StepControl, TimeStepper, propose_defaults
+
+    from petthm.discretisation.assembly import FieldScale
+    from petthm.discretisation.constraints import Dirichlet
+    from petthm.discretisation.fields import Discretisation, FieldSpec
+    from petthm.discretisation.model import Domain, Model
+    from petthm.discretisation.problem import Problem
+    from petthm.mesh import fracture as F
+    from petthm.mesh.plex import Mesh, distribute, label_boundaries, read_plex
+    from petthm.physics.kernels import heat
+    from petthm.solvers.timestepper import SOLVER_DEFAULTS, StepControl, TimeStepper, propose_defaults
     dm = read_plex(str(path), PETSc.COMM_WORLD)
     label_boundaries(dm, {"bottom": lambda x: np.isclose(x[:, 1], 0.0)})
     if split:
@@ -207,7 +207,8 @@ def test_layered_box_with_inclined_disc(tmp_path):
     columns are vertical lines of the mesh with vertices at the
     perforations' ends; the split passes its checks."""
     import meshio
-    from petthm import layeredmesh
+
+    from petthm.mesh import layered as layeredmesh
     L, R, dip, layer = 3.0, 1.0, 30.0, 0.02
     path = layeredmesh.layered_box_with_inclined_disc(str(tmp_path / "inc.msh"), L, R, dip, 1.5, 0.25, layer,
                                                       1.5, wells=[(0.0, -0.75), (0.0, 0.75)], well_size=0.1,

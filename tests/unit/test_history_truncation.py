@@ -4,8 +4,9 @@ the times history.csv writes (12 significant digits)."""
 import csv
 
 from mpi4py import MPI
-from petthm.checkpoint import truncate_history
-from petthm.output import History
+
+from petthm.io.checkpoint import truncate_history
+from petthm.io.output import History
 
 
 def _times(path):

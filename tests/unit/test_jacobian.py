@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from petthm.app import Run, make_scene
-from petthm.fields import Discretisation
-from petthm.model import MATRIX, CellJacobian
-from petthm.problem import Problem
-from petthm.verify import jacobian_fd_error
+from petthm.discretisation.fields import Discretisation
+from petthm.discretisation.model import MATRIX, CellJacobian
+from petthm.discretisation.problem import Problem
+from petthm.run.driver import Run, make_scene
+from petthm.verification.jacobian import jacobian_fd_error
 
 
 def _heat_problem(tmp_path, dim, degree, **opts):
@@ -60,11 +60,11 @@ def test_heat_jacobian_without_advection(tmp_path):
 
 def _vector_problem(tmp_path, constant: bool):
     """3-component elasticity-like operator on a small 3D box (vector path of the assembly)."""
-    from petthm import meshing
-    from petthm.assembly import FieldScale
-    from petthm.fields import FieldSpec
-    from petthm.mesh import Mesh, distribute, read_plex
-    from petthm.model import CellResidual, Model
+    from petthm.discretisation.assembly import FieldScale
+    from petthm.discretisation.fields import FieldSpec
+    from petthm.discretisation.model import CellResidual, Model
+    from petthm.mesh import generate as meshing
+    from petthm.mesh.plex import Mesh, distribute, read_plex
     path = str(tmp_path / "box.msh")
     meshing.box(path, [1.0, 1.0, 1.0], 0.5)
     mesh = Mesh(distribute(read_plex(path, PETSc.COMM_WORLD)))

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 import numpy as np
 from petsc4py import PETSc
 
-from petthm.predictor import LinearPredictor
+from petthm.solvers.predictor import LinearPredictor
 
 
 def _vec(values):

@@ -1,8 +1,8 @@
-"""``petthm.radix``: the radix orderings equal numpy's stable sorts."""
+"""``petthm.discretisation.radix``: the radix orderings equal numpy's stable sorts."""
 import numpy as np
 import pytest
 
-from petthm.radix import key_order, unique_ids
+from petthm.discretisation.radix import key_order, unique_ids
 
 
 @pytest.mark.parametrize("packed", [False, True])

@@ -1,4 +1,4 @@
-"""Element matrices summed per nonzero (petthm/sparsity.py) against the
+"""Element matrices summed per nonzero (petthm/discretisation/sparsity.py) against the
 plain sum of every element entry, and the Jacobian of a coupled scene
 assembled through it against the element entries handed to PETSc as they
 are."""
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from petthm import compat
-from petthm.sparsity import NodePairs
+from petthm.discretisation.sparsity import NodePairs
 
 
 def _tables(rng, ne, nodes, nn, m, offsets):
@@ -136,7 +136,7 @@ def _element_level_matrix(problem, values):
 ])
 def test_the_summed_jacobian_equals_the_element_entries_summed_by_petsc(tmp_path, monkeypatch, scene, opts):
     from conftest import build_problem
-    from petthm.sparsity import SummedBlocks
+    from petthm.discretisation.sparsity import SummedBlocks
     p = build_problem(tmp_path, scene, **opts)
     rng = np.random.default_rng(4)
     x = p.X.duplicate()
@@ -194,8 +194,9 @@ def _simplex_tables(tmp_path, dim, rng, shuffle):
     of ``simplexpairs`` occurs, not only the ascending one of ``Mesh``."""
     from petsc4py import PETSc
 
-    from petthm import fe, meshing
-    from petthm.mesh import Mesh, read_plex
+    from petthm.discretisation import fe
+    from petthm.mesh import generate as meshing
+    from petthm.mesh.plex import Mesh, read_plex
     path = meshing.box(str(tmp_path / "box.msh"), [1.0] * dim, 0.4)
     mesh = Mesh(read_plex(path, PETSc.COMM_SELF))
     verts, edges = mesh.cell_vertices.copy(), mesh.cell_edges.copy()
@@ -219,7 +220,7 @@ def test_pairs_numbered_by_topology_are_the_unique_pairs(tmp_path, dim, degrees,
     distinct pairs (``np.unique``), and each slot's given entry is one of
     its pairs, for P1/P2 rows and columns, triangles and tetrahedra, with
     the cells' vertices in every local order."""
-    from petthm.simplexpairs import numbered_slots
+    from petthm.discretisation.simplexpairs import numbered_slots
     rng = np.random.default_rng(5)
     verts, edges, nnodes = _simplex_tables(tmp_path, dim, rng, shuffle)
     table = {1: verts, 2: np.hstack([verts, edges])}
@@ -246,7 +247,7 @@ def test_tables_that_are_not_simplices_fall_back_to_sorting():
     the negative control of the check); checked, it declines (the nodes are
     no function of the vertices and edges), and ``NodePairs`` sorts instead;
     its sums are exact either way."""
-    from petthm.simplexpairs import numbered_slots
+    from petthm.discretisation.simplexpairs import numbered_slots
     rng = np.random.default_rng(6)
     nodes, ne = 20, 40
     rows = _tables(rng, ne, np.arange(nodes), 6, 1, np.arange(nodes))
@@ -272,7 +273,7 @@ def test_a_node_shared_by_two_edges_declines_the_topology():
     """The check's other half: nodes that are a function of the vertices and
     edges but not one-to-one (two edges' midpoints numbered as one node)
     would put one pair into two slots; the numbering declines them."""
-    from petthm.simplexpairs import numbered_slots
+    from petthm.discretisation.simplexpairs import numbered_slots
     rows = np.array([[0, 1, 2, 3, 4, 5], [1, 2, 6, 4, 7, 8]])      # two P2 triangles, edge (1, 2) shared
     assert numbered_slots(rows, rows, 2) is not None
     merged = rows.copy()

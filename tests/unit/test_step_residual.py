@@ -2,6 +2,7 @@
 solver's last one when that was evaluated at the accepted state
 (``Problem.step_residual``), and is computed afresh otherwise."""
 import numpy as np
+
 from conftest import build_problem
 
 

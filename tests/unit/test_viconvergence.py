@@ -1,4 +1,4 @@
-"""The VI Newton solvers honour -snes_stol (``petthm.viconvergence``):
+"""The VI Newton solvers honour -snes_stol (``petthm.solvers.viconvergence``):
 vinewtonrsls's own test ignores it, so a residual on a round-off floor above
 -snes_atol ran to -snes_max_it (Scene 3 with a 0.22 m first layer)."""
 import math
@@ -8,7 +8,7 @@ import pytest
 from petsc4py import PETSc
 
 from petthm import compat
-from petthm.viconvergence import VIConvergence
+from petthm.solvers.viconvergence import VIConvergence
 
 Reason = PETSc.SNES.ConvergedReason
 

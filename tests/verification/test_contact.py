@@ -4,9 +4,8 @@ Sneddon's crack openings, the contact patch test and partial opening."""
 import numpy as np
 import pytest
 
-from petthm.verify import jacobian_fd_error
-
 from conftest import build_problem
+from petthm.verification.jacobian import jacobian_fd_error
 
 SNEDDON_2D = ("-thm_sneddon_dim", 2, "-thm_sneddon_radius", 50, "-thm_sneddon_crack_size", 0.025)
 
@@ -27,7 +26,7 @@ def test_contact_jacobian_matches_finite_differences(tmp_path, scene, opts, degr
 def test_contact_jacobian_check_detects_a_missing_block(tmp_path):
     """Negative control: without the lam-u+ block the check fails."""
     problem = build_problem(tmp_path, "partial_opening", thm_partial_crack_size=0.1)
-    from petthm.model import FRACTURE_DUAL, Side, Trace
+    from petthm.discretisation.model import FRACTURE_DUAL, Side, Trace
     asm = problem.region(FRACTURE_DUAL)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians
                               if not (j.test == "lam" and j.trial == Trace("u", Side.PLUS))]

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from conftest import build_problem, fitted_slope, run_petthm
 
 FIELDS = ("u", "lam", "pf", "pm", "Tf", "Tm")
@@ -76,7 +77,8 @@ def test_the_closed_fractures_fields_converge_at_the_order_of_its_aperture(tmp_p
 def _consistency(tmp_path, size, **opts):
     """max |scaled residual| per field of the interpolated exact solution at t = 1 (P1)."""
     from petsc4py import PETSc
-    from petthm.app import make_scene
+
+    from petthm.run.driver import make_scene
     from petthm.scenes.base import on_sides
     P = build_problem(tmp_path, "coupled_mms", thm_mesh_size=size, thm_fe_degree=1, thm_coupled_mms_supg=0,
                       **opts)
@@ -140,7 +142,7 @@ def test_coupled_mms_jacobian_blocks_match_finite_differences(tmp_path, degree):
     mass balance included (Tm-u through alpha d(div u)/dt, Tm-pm and Tf-pf
     through the storage, Tf-lam and Tf-u through the aperture), against
     central differences at a random state and rate."""
-    from petthm.verify import jacobian_fd_block_errors
+    from petthm.verification.jacobian import jacobian_fd_block_errors
     problem = build_problem(tmp_path, "coupled_mms", thm_fe_degree=degree, thm_mesh_size=0.25,
                             thm_coupled_mms_state="closed")
     err = jacobian_fd_block_errors(problem, t=0.5, shift=2.0, eps=(1e-6, 1e-4))
@@ -151,8 +153,8 @@ def test_coupled_mms_jacobian_blocks_match_finite_differences(tmp_path, degree):
 
 def test_coupled_mms_jacobian_check_can_fail(tmp_path, monkeypatch):
     """Negative control: without the SUPG block of alpha d(div u)/dt the Tm-u block is wrong."""
-    from petthm.kernels import heat as hk
-    from petthm.verify import jacobian_fd_block_errors
+    from petthm.physics.kernels import heat as hk
+    from petthm.verification.jacobian import jacobian_fd_block_errors
     monkeypatch.setattr(hk, "heat_g3_Tu", lambda h, ctx: np.zeros((1, 1, 1, 2, 2, 2)))     # 2D
     problem = build_problem(tmp_path, "coupled_mms", thm_fe_degree=1, thm_mesh_size=0.25)
     err = jacobian_fd_block_errors(problem, t=0.5, shift=2.0, eps=1e-6)

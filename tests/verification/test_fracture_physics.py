@@ -6,9 +6,8 @@ with the mass and energy balance of every step."""
 import numpy as np
 import pytest
 
-from petthm.verify import jacobian_fd_error
-
 from conftest import build_problem, run_petthm
+from petthm.verification.jacobian import jacobian_fd_error
 
 
 def _problem(tmp_path, scene, **opts):
@@ -44,7 +43,7 @@ def test_jacobian_check_detects_a_missing_coupling(tmp_path):
     SUPG depend on grad pf) the check fails."""
     problem = _problem(tmp_path, "lauwerier", thm_fe_degree=1, thm_fracture_heat_exchange="nusselt",
                        **COARSE_LAUWERIER)
-    from petthm.model import FRACTURE
+    from petthm.discretisation.model import FRACTURE
     asm = problem.region(FRACTURE)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians if not (j.test == "Tf" and j.trial == "pf")]
     asm.build_pattern()
@@ -60,9 +59,9 @@ def test_wall_conduction_blocks_match_finite_differences(tmp_path, degree):
     (kernels/wallflux.py): the Tf rows' block in the rock temperature matches
     finite differences, and without the blocks of the rock cells next to the
     faces it does not (negative control)."""
-    from petthm.fields import Adjacent
-    from petthm.model import FRACTURE
-    from petthm.verify import jacobian_fd_block_errors
+    from petthm.discretisation.fields import Adjacent
+    from petthm.discretisation.model import FRACTURE
+    from petthm.verification.jacobian import jacobian_fd_block_errors
     problem = _problem(tmp_path, "lauwerier", thm_fe_degree=degree, thm_fluid_viscosity="water",
                        thm_fracture_supg_wall_conduction="true", **COARSE_LAUWERIER)
     asm = problem.region(FRACTURE)
@@ -113,7 +112,7 @@ def test_lauwerier_outlet_and_profile(tmp_path):
     assert e["profile_max_rel_t1e+07"] <= 1e-2 and e["profile_max_rel_t1e+08"] <= 1e-2
     assert b["Tf_bounds_violation"] <= 1e-2
     assert b["mass_balance"] <= 1e-6 and b["energy_balance"] <= 1e-6
-    import meshio                                   # fracture fields for ParaView
+    import meshio  # fracture fields for ParaView
     with meshio.xdmf.TimeSeriesReader(str(tmp_path / "fracture.xdmf")) as r:
         pts, cells = r.read_points_cells()
         _, pd, _ = r.read_data(r.num_steps - 1)
@@ -148,7 +147,7 @@ def test_auto_layer_is_sized_from_the_first_output_time(tmp_path):
     from it, and the run says so."""
     import meshio
 
-    from petthm.meshing import layer_heights
+    from petthm.mesh.generate import layer_heights
     proc, s = run_petthm("lauwerier", tmp_path, "-thm_lauwerier_fracture_size", 4, "-thm_mesh_size", 20,
                          "-thm_lauwerier_layer", "auto", "-thm_rock_conductivity", 2.0,
                          "-thm_rock_density", 2500, "-thm_rock_heat_capacity", 1000, "-thm_rock_porosity", 0,

@@ -7,9 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from petthm.verify import jacobian_fd_block_errors
-
 from conftest import build_problem
+from petthm.verification.jacobian import jacobian_fd_block_errors
 
 FRICTION_BLOCKS = [("tau", "tau"), ("tau", "lam"), ("tau", "u"), ("u", "tau")]
 
@@ -41,7 +40,7 @@ def test_friction_jacobian_matches_finite_differences(tmp_path, dim, degree, sta
 def test_friction_jacobian_check_detects_a_missing_block(tmp_path):
     """Negative control: without d(law)/d(lam) the slip state's check fails."""
     problem = _friction_problem(tmp_path, 3, 1)
-    from petthm.model import FRACTURE_NODAL
+    from petthm.discretisation.model import FRACTURE_NODAL
     asm = problem.region(FRACTURE_NODAL)
     asm.model.jacobians[:] = [j for j in asm.model.jacobians if not (j.test == "tau" and j.trial == "lam")]
     asm.build_pattern()

@@ -3,9 +3,8 @@ differences, rollers on single components, and Terzaghi's consolidation."""
 import numpy as np
 import pytest
 
-from petthm.verify import jacobian_fd_error
-
 from conftest import build_problem, run_petthm
+from petthm.verification.jacobian import jacobian_fd_error
 
 
 def _problem(tmp_path, scene, **opts):

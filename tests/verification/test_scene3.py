@@ -10,8 +10,8 @@ import pytest
 
 from conftest import build_problem
 from petthm.errors import InputError
-from petthm.matrixwells import Perforation, interval_nodes, lumped_weights
-from petthm.verify import jacobian_fd_block_errors
+from petthm.physics.matrixwells import Perforation, interval_nodes, lumped_weights
+from petthm.verification.jacobian import jacobian_fd_block_errors
 
 #: the coarse variant's mesh (options/scenes/inclined_penny_coarse.opts)
 COARSE = dict(thm_scene3_fracture_size=50, thm_scene3_well_size=15, thm_mesh_size=300)
@@ -57,7 +57,7 @@ def test_scene3_jacobian_blocks_match_finite_differences(tmp_path, degree):
 def test_scene3_jacobian_check_can_fail(tmp_path, monkeypatch):
     """Negative control: without the Biot block of the flow equation the
     pm-u block is wrong, and the check says so."""
-    from petthm.kernels import poroelastic as pe
+    from petthm.physics.kernels import poroelastic as pe
     full = pe.elastic_terms
 
     def without_pm_u(el):
@@ -129,7 +129,7 @@ def test_scene3_thin_first_layer_starts(tmp_path, petthm_run):
     Scene 3 at t = 0: the residual's round-off floor (3.7-5.0e-12) lay above
     snes_atol 1e-12 and vinewtonrsls's own test ignores -snes_stol, so Newton
     ran to its limit with updates of x's last bits.  With the step-length
-    test (``petthm.viconvergence``) it runs, and the balances close."""
+    test (``petthm.solvers.viconvergence``) it runs, and the balances close."""
     out = tmp_path / "run"
     proc, _ = petthm_run("inclined_penny", out, "-thm_fe_degree", 1, "-thm_final_time", 2 * 86400,
                          "-thm_dt_growth", 1.0, "-thm_scene3_layer", "auto", "-thm_scene3_layer_growth", 2,

@@ -14,9 +14,8 @@ import re
 import numpy as np
 import pytest
 
-from petthm.output import read_output
-
 from conftest import ROOT, run_petthm
+from petthm.io.output import read_output
 
 O = f"{ROOT}/options/scenes"
 #: coarse meshes, short runs (each about a second here)

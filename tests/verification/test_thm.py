@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from conftest import build_problem
-from petthm.kernels import contact as ct
-from petthm.verify import jacobian_fd_block_errors
+from petthm.physics.kernels import contact as ct
+from petthm.verification.jacobian import jacobian_fd_block_errors
 
 COARSE = dict(thm_scene2_fracture_size=40, thm_scene2_well_size=20, thm_scene2_layer=0)
 #: a coarse layered mesh (7200 cells)

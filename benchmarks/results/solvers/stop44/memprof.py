@@ -16,14 +16,14 @@ def sampler():
         trace.append((time.time() - t0, r, p))
         time.sleep(0.05)
 threading.Thread(target=sampler, daemon=True).start()
-import petthm.app as A
+import petthm.run.driver as A
 orig_stage, orig_pop = A.Run._stage, A.Run._pop
 def _stage(self, name):
     phase[0] = name; return orig_stage(self, name)
 def _pop(self, name, st, t0_):
     phase[0] = "after-" + name; return orig_pop(self, name, st, t0_)
 A.Run._stage, A.Run._pop = _stage, _pop
-import petthm.problem as P
+import petthm.discretisation.problem as P
 orig_init = P.Problem.__init__
 def init(self, *a, **k):
     phase[0] = "setup:Problem"; orig_init(self, *a, **k); phase[0] = "setup:after-Problem"

@@ -3,7 +3,7 @@ import os, sys, runpy, tracemalloc
 sys.argv = ["petthm"] + sys.argv[1:]
 import petsc4py; petsc4py.init(["petthm"] + sys.argv[2:])
 tracemalloc.start(6)
-import petthm.app as A
+import petthm.run.driver as A
 orig_stage = A.Run._stage
 seen = []
 def dump(tag):

@@ -1,0 +1,158 @@
+"""Registration tables: which kernels act on which field (pair) on which region.
+
+A physics model is a ``Model``: the active fields, the residual terms
+(``f0``: coefficient of the test function, ``f1``: coefficient of its
+gradient), the Jacobian blocks (``g0``..``g3`` in PETSc's naming, plus
+``g2_lap``: test gradient times the trial function's Laplacian, which the
+consistent SUPG term of P2 elements needs) and the facet terms of the
+Neumann/Robin conditions.  Kernels are functions ``kernel(ctx)`` of a
+quadrature context (see ``assembly.CellContext``) returning arrays over
+(cells, quadrature points, ...); parameters are bound with closures.
+
+Where a term lives is typed: a ``Region`` is a ``Domain`` (the matrix cells,
+or the - faces of the cohesive cells of the fracture) with its quadrature
+rule (Gauss, or the vertex rule of row-sum lumping); on the fracture a
+matrix field is seen through a ``Trace`` on one face (``Side``).  Models are
+composed by the builders of ``petthm.physics.builders``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+from petthm.discretisation.fields import (  # noqa: F401
+    Adjacent,
+    Domain,
+    FieldRef,
+    FieldSpec,
+    Side,
+    Trace,
+    base_field,
+    traces,
+)
+
+Kernel = Callable[..., "object"]
+
+
+@dataclass(frozen=True)
+class Region:
+    """A domain with a quadrature rule: ``lumped`` integrates with the vertex
+    rule (row-sum lumping of P1 mass-type terms); ``dual``: Gauss, with the
+    domain's own fields (the contact traction) in their dual basis
+    (``fe.tabulate_dual``; the multiplier pairing of docs/contact.md);
+    ``nodal``: the Lagrange nodes with the weights of the dual pairing
+    (``fe.nodal_rule``; the friction law, a function of nodal values)."""
+    domain: Domain = Domain.MATRIX
+    lumped: bool = False
+    dual: bool = False
+    nodal: bool = False
+
+    def _key(self) -> tuple:
+        return (self.domain.value, self.lumped, self.dual, self.nodal)
+
+    def __lt__(self, other: "Region") -> bool:     # matrix after fracture, lumped after Gauss
+        return self._key() < other._key()
+
+    def __str__(self) -> str:
+        return self.domain.value + "".join(f"@{k}" for k in ("lumped", "dual", "nodal") if getattr(self, k))
+
+
+MATRIX = Region(Domain.MATRIX)
+FRACTURE = Region(Domain.FRACTURE)
+FRACTURE_LUMPED = Region(Domain.FRACTURE, lumped=True)
+FRACTURE_DUAL = Region(Domain.FRACTURE, dual=True)
+FRACTURE_NODAL = Region(Domain.FRACTURE, nodal=True)
+MATRIX_LUMPED = Region(Domain.MATRIX, lumped=True)
+
+
+@dataclass(frozen=True)
+class CellResidual:
+    """Residual of ``field`` on the cells: int f0 . v + f1 : grad v."""
+    field: FieldRef
+    f0: Optional[Kernel] = None
+    f1: Optional[Kernel] = None
+    region: Region = MATRIX
+
+
+@dataclass(frozen=True)
+class CellJacobian:
+    """d(residual of ``test``)/d(``trial``) (+ shift * d/d(trial_dot))."""
+    test: FieldRef
+    trial: FieldRef
+    g0: Optional[Kernel] = None
+    g1: Optional[Kernel] = None
+    g2: Optional[Kernel] = None
+    g3: Optional[Kernel] = None
+    g2_lap: Optional[Kernel] = None
+    region: Region = MATRIX
+    #: the block depends on neither the state, the time nor the shift (a
+    #: linear term with constant coefficients, e.g. elasticity): ``Problem``
+    #: assembles it once and keeps its values until the residual scaling changes
+    constant: bool = False
+
+
+@dataclass(frozen=True)
+class FacetTerm:
+    """Residual f0 (and its Jacobian g0 w.r.t. the same field) on a boundary part."""
+    field: str
+    boundary: str
+    f0: Kernel
+    g0: Optional[Kernel] = None
+
+
+@dataclass(frozen=True)
+class PointTerm:
+    """Residual terms at one node (a well, physics.md section 9).
+
+    ``residual(values, t)`` receives the SI values of ``fields`` at the node
+    and returns {field: contribution}; ``jacobian(values, t)`` returns
+    {(test, trial): derivative} (SI).  ``point`` is the node's position (a
+    mesh vertex)."""
+    name: str
+    point: tuple
+    fields: tuple
+    residual: Kernel
+    jacobian: Kernel
+
+
+#: the residual and Jacobian registrations of one physical term
+Terms = tuple[list, list]
+
+
+@dataclass
+class Model:
+    """The active fields and every term, each on its region.  ``bounds``
+    make the problem a variational inequality (contact: the traction
+    ``lam`` >= 0), solved by SNES's VI Newton methods; ``ties`` make a matrix
+    field's nodes on the fracture walls the fracture field's unknowns."""
+    fields: list[FieldSpec] = field(default_factory=list)
+    residuals: list[CellResidual] = field(default_factory=list)
+    jacobians: list[CellJacobian] = field(default_factory=list)
+    facets: list[FacetTerm] = field(default_factory=list)
+    points: list[PointTerm] = field(default_factory=list)
+    ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
+    bounds: dict = field(default_factory=dict)    # {field: (lower, upper)} SI, None: unbounded
+    preconditioner: list[CellJacobian] = field(default_factory=list)
+    aperture: Optional[object] = None             # kernels.contact.Aperture (deformable fracture; outputs)
+    friction: Optional[object] = None             # kernels.friction.Friction (outputs)
+
+    def regions(self) -> list[Region]:
+        return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})
+
+    def has(self, name: str) -> bool:
+        return any(f.name == name for f in self.fields)
+
+    def spec(self, name: str) -> FieldSpec:
+        """The FieldSpec of an active field."""
+        return next(f for f in self.fields if f.name == name)
+
+    def add_field(self, spec: FieldSpec) -> None:
+        if self.has(spec.name):
+            raise ValueError(f"field {spec.name} is already in the model")
+        self.fields.append(spec)
+
+    def add(self, terms: Terms) -> None:
+        """Register the residuals and Jacobian blocks of a term."""
+        res, jac = terms
+        self.residuals += res
+        self.jacobians += jac

@@ -1,0 +1,261 @@
+"""Model builders: the coupled physics of physics.md composed into a ``Model``.
+
+A scene creates a ``ModelBuilder`` with its parameters and calls the
+builders of the physics it has, in any order; each builder adds its fields
+and terms and keeps the kernel objects that later builders couple to:
+
+=====================  =======================================  ===========
+builder                physics (physics.md section)             fields
+=====================  =======================================  ===========
+``elasticity``         thermo-poro-elastic rock (2), Biot (5)    u
+``matrix_flow``        Darcy flow with storage (5)              pm
+``matrix_heat``        advection-conduction in the rock (6)      Tm
+``contact``            face loads, frictionless contact (2, 3)   lam
+``deformable``         a = ac(lam) + max(g, 0) (3)               -
+``fracture_flow``      cubic law with storage, da/dt (4)         pf
+``leakoff``            pm = pf on the walls (5)                  -
+``fracture_heat``      fracture heat, wall exchange (7)          Tf
+``wells``              point wells, on a fracture or along a     -
+                       matrix well's interval (9)
+=====================  =======================================  ===========
+
+``build()`` then adds the terms that couple two of them once both exist
+(today the thermo-mechanical heating of section 6, when
+``-thm_thermomechanical_heating`` is on and the model has u and Tm) and
+orders the fields canonically (u, lam, pf, pm, Tf, Tm).  Adding a coupled
+term is one kernel (``petthm/physics/kernels``) and one builder here.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Callable, Optional
+
+import numpy as np
+
+from petthm.discretisation.fields import FieldSpec
+from petthm.discretisation.model import FRACTURE, FRACTURE_DUAL, Domain, Model, PointTerm, traces
+from petthm.errors import InputError
+from petthm.physics.kernels import contact as ct
+from petthm.physics.kernels import flow as fk
+from petthm.physics.kernels import friction as fr
+from petthm.physics.kernels import heat as hk
+from petthm.physics.kernels import poroelastic as pe
+from petthm.physics.kernels.wallflux import WallConduction
+from petthm.physics.materials import NUSSELT
+
+#: canonical order of the fields (the order of the unknowns in the section)
+FIELD_ORDER = ("u", "lam", "tau", "pf", "pm", "Tf", "Tm")
+
+#: shift of the contact function relative to the displacement scale (kernels/contact.py)
+GAP_TOLERANCE = 1e-12
+
+
+class ModelBuilder:
+    """Composes a ``Model`` from the builders below (see the module docstring).
+
+    ``p``: the scene's ``materials.Parameters``; ``dim``: the mesh dimension.
+    The kernel objects made so far are public attributes: ``elastic``,
+    ``mechanics``, ``aperture``, ``flows`` and ``heats`` ({Domain: object})."""
+
+    def __init__(self, p, dim: int):
+        self.p, self.dim = p, dim
+        self.model = Model()
+        self.elastic: Optional[pe.Elastic] = None
+        self.mechanics: Optional[ct.FractureMechanics] = None
+        self.aperture: Optional[ct.Aperture] = None
+        self.frictional: Optional[fr.Friction] = None
+        self.flows: dict = {}
+        self.heats: dict = {}
+
+    # -- rock ---------------------------------------------------------------------------
+    def elasticity(self, degree: int, *, biot: bool = False, thermal: bool = False,
+                   body_force: tuple = ()) -> pe.Elastic:
+        """u with drained elasticity (E, nu), the Biot coupling to pm
+        (alpha, p0 when the scene has -thm_initial_pressure) and the thermal
+        strain of Tm (beta_s, T0)."""
+        p = self.p
+        kw = {}
+        if biot:           # sigma carries alpha (pm - p0): u is the displacement from the in-situ state
+            kw.update(p="pm", biot=p.rock_biot_coefficient, p_ref=getattr(p, "initial_pressure", 0.0))
+        if thermal:
+            kw.update(T="Tm", thermal_expansion=p.rock_thermal_expansion, T_ref=p.T0)
+        self.elastic = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, self.dim,
+                                  body_force=body_force, **kw)
+        self.model.add_field(FieldSpec("u", self.dim, degree))
+        self.model.add(pe.elastic_terms(self.elastic))
+        return self.elastic
+
+    def matrix_flow(self, degree: int, *, permeability: np.ndarray, storage: float,
+                    thermal_storage: float = 0.0, heat: bool = False,
+                    source: Optional[Callable] = None) -> fk.Flow:
+        """pm: S dp/dt - B dT/dt + div(-k/mu grad p) = s (with ``heat``: mu(Tm), B;
+        ``source`` s(x, t), 1/s: the manufactured solutions)."""
+        fl = fk.Flow(Domain.MATRIX, "pm", "Tm" if heat else None, storage, permeability,
+                     self.p.fluid_viscosity,
+                     thermal_storage if heat else 0.0, source=source)
+        self.model.add_field(FieldSpec("pm", 1, degree))
+        self.model.add(fk.flow_terms(fl))
+        self.flows[Domain.MATRIX] = fl
+        return fl
+
+    def biot_stabilisation(self, factor: float) -> None:
+        """The pressure stabilisation of the Biot flow equation (kernels/poroelastic.py)."""
+        self.model.add(pe.pressure_stabilisation_terms(self.elastic, "pm", factor))
+
+    def matrix_heat(self, degree: int, *, capacity: Optional[float] = None, conductivity=None,
+                    lumped: bool = False, velocity=None, source: Optional[Callable] = None,
+                    supg: bool = True, reference_temperature: float = 0.0) -> hk.Heat:
+        """Tm in conservative form (kernels/heat.py), advected by the
+        matrix flow if there is one, or by a prescribed ``velocity``; the
+        capacity and conductivity of the porous rock (``Parameters.rho_c``,
+        ``conductivity``) unless given (a rock without pores)."""
+        p = self.p
+        advect = Domain.MATRIX in self.flows or velocity is not None
+        C = p.rho_c if capacity is None else capacity
+        el = self.elastic
+        flow = self.flows.get(Domain.MATRIX)
+        biot = (el.u, el.biot) if el is not None and flow is not None and el.p == flow.p and el.biot else ()
+        h = hk.Heat(Domain.MATRIX, "Tm", C, p.conductivity if conductivity is None else conductivity,
+                    p.fluid_rho_c if advect else 0.0, flow, velocity=velocity,
+                    source=source, reference_temperature=reference_temperature, degree=degree, supg=supg,
+                    lumped=lumped, biot=biot)
+        self.model.add_field(FieldSpec("Tm", 1, degree))
+        self.model.add(hk.heat_terms(h))
+        self.heats[Domain.MATRIX] = h
+        return h
+
+    # -- fracture mechanics ----------------------------------------------------------------
+    def contact(self, *, normal_stress: float, u_scale: float, pressure: Optional[Callable] = None,
+                insitu_stress: Optional[np.ndarray] = None) -> ct.FractureMechanics:
+        """lam >= 0 with the face loads pf + lam + sigma0_nn on u+-
+        (kernels/contact.py); the fluid pressure is the field pf (when the
+        model has fracture flow) or a prescribed ``pressure(x, t)``.
+        ``normal_stress``: the in-situ compressive stress on the fracture;
+        ``u_scale``: the displacement scale (the VI's gap tolerance).  lam
+        has the degree of u, paired in the dual basis
+        (``-thm_contact_pairing dual``), or is P1 with the consistent
+        pairing (``consistent``).  ``insitu_stress``: the in-situ stress
+        tensor (tension positive) whose shear on each face the friction
+        carries in the in-situ state (needs friction); ``normal_stress`` is
+        then its compressive normal stress on the fracture."""
+        dual = self.p.contact_pairing == "dual"
+        self.mechanics = ct.FractureMechanics(self.dim, pf=None if pressure else "pf", pressure=pressure,
+                                              insitu_normal_stress=-normal_stress,
+                                              insitu_stress=() if insitu_stress is None else
+                                              tuple(np.ravel(insitu_stress)),
+                                              gap_tolerance=GAP_TOLERANCE * u_scale,
+                                              pairing=FRACTURE_DUAL if dual else FRACTURE)
+        degree = self.model.spec("u").degree if dual else 1
+        self.model.add_field(FieldSpec("lam", 1, degree, Domain.FRACTURE))
+        self.model.add(ct.fracture_mechanics_terms(self.mechanics))
+        self.model.bounds["lam"] = (0.0, None)
+        if self.p.fracture_friction > 0 or self.p.fracture_cohesion > 0:
+            self.friction(degree, dual)
+        return self.mechanics
+
+    def friction(self, degree: int, dual: bool) -> fr.Friction:
+        """The tangential traction tau (d - 1 components) with Coulomb's law
+        (kernels/friction.py); needs the dual pairing."""
+        if not dual:
+            raise InputError("option -thm_fracture_friction > 0 needs -thm_contact_pairing dual")
+        p = self.p
+        self.frictional = fr.Friction(self.mechanics, p.fracture_friction, p.fracture_cohesion,
+                                      p.rock_youngs_modulus)
+        self.model.add_field(FieldSpec("tau", self.dim - 1, degree, Domain.FRACTURE))
+        self.model.friction = self.frictional
+        self.model.add(fr.friction_terms(self.frictional))
+        return self.frictional
+
+    def joint_law(self) -> ct.JointLaw:
+        p = self.p
+        return ct.JointLaw(p.fracture_aperture, p.fracture_normal_stiffness,
+                           p.fracture_residual_fraction * p.fracture_aperture)
+
+    def deformable(self, mechanics: ct.FractureMechanics) -> ct.Aperture:
+        """The aperture a(lam, g) that fracture flow and heat use."""
+        self.aperture = ct.Aperture(mechanics, self.joint_law())
+        self.model.aperture = self.aperture
+        return self.aperture
+
+    # -- fracture flow and heat -------------------------------------------------------------
+    def fracture_flow(self, degree: int, *, reference_aperture: float, heat: bool = False,
+                      compressibility: Optional[float] = None, source: Optional[Callable] = None) -> fk.Flow:
+        """pf: cubic-law flow on the fracture with storage a c_f (- a beta_f dTf/dt
+        with ``heat``), mu(Tf); per unit aperture on a deformable fracture."""
+        p = self.p
+        a = reference_aperture if self.aperture is None else 1.0
+        cf = p.fluid_compressibility if compressibility is None else compressibility
+        beta = a * p.fluid_thermal_expansion if heat else 0.0
+        fl = fk.Flow(Domain.FRACTURE, "pf", "Tf" if heat else None, a * cf, a ** 3 / 12 * np.eye(self.dim),
+                     p.fluid_viscosity, beta, aperture=self.aperture, source=source)
+        self.model.add_field(FieldSpec("pf", 1, degree, Domain.FRACTURE))
+        self.model.add(fk.flow_terms(fl))
+        self.flows[Domain.FRACTURE] = fl
+        return fl
+
+    def leakoff(self) -> None:
+        """Leakoff: the matrix pressure on the walls is the fracture pressure
+        (a tie, docs/fracture.md), so the Darcy flux through the walls is L."""
+        self.model.ties["pm"] = "pf"
+
+    def fracture_heat(self, degree: int, *, reference_aperture: float, lumped: bool = False,
+                      supg: bool = True, source: Optional[Callable] = None) -> hk.Heat:
+        """Tf: advection-conduction in the fracture and the wall exchange
+        with the rock (``-thm_fracture_heat_exchange``): equilibrium ties the
+        wall nodes of Tm to Tf; otherwise hw (Tf - Tm) on both faces, with
+        hw = Nu lambda_f / (2 a) at the local aperture of a deformable fracture.
+        ``source``: a heat source per unit fracture area s(x, t) (W/m2; the
+        manufactured solutions)."""
+        p = self.p
+        a = reference_aperture if self.aperture is None else 1.0
+        ex = p.fracture_heat_exchange
+        hw = ex.coefficient(reference_aperture, p.fluid_conductivity)
+        if hw is not None and self.aperture is not None and ex.mode == "nusselt":
+            hw = hk.ApertureExchange(NUSSELT * p.fluid_conductivity / 2, self.aperture)
+        if hw is None:
+            self.model.ties["Tm"] = "Tf"
+        else:
+            if Domain.MATRIX in self.flows:
+                raise InputError("option -thm_fracture_heat_exchange: only 'equilibrium' is implemented "
+                                 "with a permeable matrix (the heat carried by leakoff needs the wall flux)")
+            self.model.add(hk.exchange_terms("Tf", traces("Tm"), hw, lumped=lumped))
+        h = hk.Heat(Domain.FRACTURE, "Tf", a * p.fluid_rho_c, a * p.fluid_conductivity, p.fluid_rho_c,
+                    self.flows[Domain.FRACTURE], degree=degree, supg=supg, aperture=self.aperture,
+                    source=source)
+        self.model.add_field(FieldSpec("Tf", 1, degree, Domain.FRACTURE))
+        if hw is not None:
+            self.model.add(hk.heat_terms(h))
+        self.heats[Domain.FRACTURE] = h          # tied: its terms in build(), with the rock's wall flux
+        return h
+
+    def wells(self, terms: list[PointTerm]) -> None:
+        self.model.points.extend(terms)
+
+    def _tied_fracture_heat(self) -> None:
+        """The terms of the fracture heat tied to the rock (equilibrium exchange);
+        with -thm_fracture_supg_wall_conduction its SUPG residual carries the
+        rock's wall conduction (kernels/wallflux.py)."""
+        h = self.heats[Domain.FRACTURE]
+        rock = self.heats.get(Domain.MATRIX)
+        if rock is not None and h.supg and h.advects and self.p.fracture_supg_wall_conduction:
+            h = replace(h, wall=WallConduction(rock.T, rock.conductivity))
+            self.heats[Domain.FRACTURE] = h
+        self.model.add(hk.heat_terms(h))
+
+    # -- the model ------------------------------------------------------------------------
+    def build(self) -> Model:
+        """The model, with the couplings of pairs of builders added and the
+        fields in the canonical order."""
+        m = self.model
+        if m.ties.get("Tm") == "Tf":
+            self._tied_fracture_heat()
+        # a scene whose model has u and Tm declares -thm_thermomechanical_heating
+        if self.elastic is not None and m.has("Tm") and self.p.thermomechanical_heating:
+            porous = m.has("pm")
+            phi_beta = self.p.rock_porosity * self.p.fluid_thermal_expansion if porous else 0.0
+            m.add(pe.heating_terms(self.elastic, "Tm", "pm" if porous else None, phi_beta))
+        # what a block preconditioner adds to the pressure block (not the Jacobian)
+        if self.elastic is not None and self.elastic.p is not None and m.has(self.elastic.p):
+            m.preconditioner += pe.fixed_stress_terms(self.elastic, self.elastic.p)
+        m.fields.sort(key=lambda f: FIELD_ORDER.index(f.name))
+        return m

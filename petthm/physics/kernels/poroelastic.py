@@ -1,0 +1,197 @@
+"""Thermo-poro-elastic deformation of the matrix (physics.md section 2) and the
+Biot term of the matrix flow equation (section 5).
+
+    -div sigma = F,   sigma = C : eps(u) - alpha (p - p0) I - K beta_s (T - T0) I
+
+(tension positive; the in-situ stress sigma0 is in equilibrium and left out:
+u is the displacement from the in-situ state).  Weak form:
+
+    int grad w : sigma - int w . F - int_N w . t = 0
+
+(F a constant body force, ``Elastic.body_force``: e.g. the rock's weight).
+
+Flow: alpha d(div u)/dt is added to the matrix flow residual (the rest of
+section 5 is ``flow.Flow`` with storage S = 1/M = phi c_f + (alpha - phi)/K_s).
+In 2D the equations are those of plane strain (the same formulas with d = 2).
+Heat (``heating_terms``): the thermo-mechanical terms of section 6,
+beta_s K T d(div u)/dt - phi beta_f T dp/dt, in the matrix heat equation.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Optional
+
+import numpy as np
+
+from petthm.discretisation.model import MATRIX, CellJacobian, CellResidual, FacetTerm, Region
+
+
+@dataclass(frozen=True)
+class Elastic:
+    """Drained isotropic elasticity with Biot and thermal coupling."""
+    youngs_modulus: float
+    poisson_ratio: float
+    dim: int
+    u: str = "u"
+    p: Optional[str] = None           # pore pressure field (Biot coupling)
+    biot: float = 0.0
+    p_ref: float = 0.0
+    T: Optional[str] = None           # temperature field (thermal strain)
+    thermal_expansion: float = 0.0    # volumetric beta_s
+    T_ref: float = 0.0
+    body_force: tuple = ()            # F (N/m3), constant: -div sigma = F
+    region: Region = MATRIX
+
+    @property
+    def shear(self) -> float:
+        return self.youngs_modulus / (2 * (1 + self.poisson_ratio))
+
+    @property
+    def lame(self) -> float:
+        E, nu = self.youngs_modulus, self.poisson_ratio
+        return E * nu / ((1 + nu) * (1 - 2 * nu))
+
+    @property
+    def bulk(self) -> float:
+        return self.youngs_modulus / (3 * (1 - 2 * self.poisson_ratio))
+
+    def stiffness(self) -> np.ndarray:
+        """C[a, e, b, f] = lambda d_ae d_bf + G (d_ab d_ef + d_af d_eb)."""
+        I = np.eye(self.dim)
+        return self.lame * np.einsum("ae,bf->aebf", I, I) + self.shear * (
+            np.einsum("ab,ef->aebf", I, I) + np.einsum("af,eb->aebf", I, I))
+
+
+def stress(el: Elastic, ctx):
+    """sigma (nc, nq, d, d), tension positive."""
+    G = ctx.grad(el.u)
+    eps = 0.5 * (G + np.swapaxes(G, 2, 3))
+    iso = el.lame * np.trace(eps, axis1=2, axis2=3)
+    if el.p is not None and el.biot:
+        iso = iso - el.biot * (ctx.value(el.p)[..., 0] - el.p_ref)
+    if el.T is not None and el.thermal_expansion:
+        iso = iso - el.bulk * el.thermal_expansion * (ctx.value(el.T)[..., 0] - el.T_ref)
+    return 2 * el.shear * eps + iso[..., None, None] * np.eye(el.dim)
+
+
+def _body_f0(el: Elastic, ctx):
+    """-F: the body force's part of int grad w : sigma - int w . F."""
+    return np.broadcast_to(-np.asarray(el.body_force, dtype=float), ctx.shape + (el.dim,))
+
+
+def _g3_uu(el: Elastic, ctx):
+    return el.stiffness()[None, None]
+
+
+def _g2_coupling(coef: float, dim: int, ctx):
+    return (-coef * np.eye(dim))[None, None, :, :, None]
+
+
+def _biot_f0(el: Elastic, ctx):
+    """alpha d(div u)/dt in the flow equation."""
+    Gdot = _grad_dot(ctx, el.u)
+    return el.biot * np.trace(Gdot, axis1=2, axis2=3)[..., None]
+
+
+def _grad_dot(ctx, name):
+    """Gradient of the time derivative of a field (nc, nq, m, d)."""
+    return ctx.grad_dot(name)
+
+
+def _biot_g1(el: Elastic, ctx):
+    return (el.biot * ctx.shift * np.eye(el.dim))[None, None, None]
+
+
+def elastic_terms(el: Elastic) -> tuple[list, list]:
+    """Momentum balance of ``el.u`` and the Biot term of the flow equation."""
+    res = [CellResidual(el.u, partial(_body_f0, el) if el.body_force else None, partial(stress, el),
+                        region=el.region)]
+    jac = [CellJacobian(el.u, el.u, g3=partial(_g3_uu, el), region=el.region, constant=True)]
+    if el.p is not None and el.biot:
+        jac.append(CellJacobian(el.u, el.p, g2=partial(_g2_coupling, el.biot, el.dim), region=el.region,
+                                constant=True))
+        res.append(CellResidual(el.p, partial(_biot_f0, el), None, region=el.region))
+        jac.append(CellJacobian(el.p, el.u, g1=partial(_biot_g1, el), region=el.region))
+    if el.T is not None and el.thermal_expansion:
+        jac.append(CellJacobian(el.u, el.T, g2=partial(_g2_coupling, el.bulk * el.thermal_expansion, el.dim),
+                                region=el.region, constant=True))
+    return res, jac
+
+
+def heating_terms(el: Elastic, T: str, p: Optional[str] = None,
+                  porosity_expansion: float = 0.0) -> tuple[list, list]:
+    """Thermo-mechanical heating of physics.md section 6 in the heat equation of ``T``:
+
+        + beta_s K T d(div u)/dt - phi beta_f T dp/dt
+
+    (T in kelvin; compression heats, expansion and pressure rise of the pore
+    fluid cool).  ``porosity_expansion`` is phi beta_f (0 or no ``p``: the
+    strain term only).  Exact Jacobians with respect to T, u and p."""
+    bK = el.bulk * el.thermal_expansion
+    pe = porosity_expansion if p is not None else 0.0
+
+    def rate(ctx):
+        r = bK * np.trace(_grad_dot(ctx, el.u), axis1=2, axis2=3)
+        if pe:
+            r = r - pe * ctx.dot(p)[..., 0]
+        return r
+
+    def f0(ctx):
+        return (ctx.value(T)[..., 0] * rate(ctx))[..., None]
+
+    def g0_TT(ctx):
+        return rate(ctx)[..., None, None]
+
+    def g1_Tu(ctx):
+        return (bK * ctx.shift * ctx.value(T)[..., 0])[..., None, None,
+                                                       None] * np.eye(el.dim)[None, None, None]
+
+    def g0_Tp(ctx):
+        return (-pe * ctx.shift * ctx.value(T)[..., 0])[..., None, None]
+    res = [CellResidual(T, f0, None, region=el.region)]
+    jac = [CellJacobian(T, T, g0=g0_TT, region=el.region), CellJacobian(T, el.u, g1=g1_Tu, region=el.region)]
+    if pe:
+        jac.append(CellJacobian(T, p, g0=g0_Tp, region=el.region))
+    return res, jac
+
+
+def traction(u: str, boundary: str, t_of_x) -> FacetTerm:
+    """Prescribed traction t (Pa, vector) on a boundary part: residual -int w . t."""
+    def f0(ctx):
+        return -np.broadcast_to(t_of_x(ctx.x, ctx.t), ctx.shape + (ctx.dim,))
+    return FacetTerm(u, boundary, f0, None)
+
+
+def fixed_stress_terms(el: Elastic, p: str) -> list[CellJacobian]:
+    """The fixed-stress approximation of the pressure Schur complement
+    (a preconditioner block, not part of the Jacobian):
+
+        S = A_pp - A_pu A_uu^-1 A_up  ~  A_pp + shift alpha^2 / K_dr M_p,
+
+    A_pu = shift alpha (q, div du) (section 5), A_up = -alpha (div w, dp)
+    (section 2), K_dr = lambda + 2 G / d the drained bulk modulus of the
+    d-dimensional body (Kim, Tchelepi & Juanes 2011; the fixed-stress
+    split's stabilisation with the physical choice of its constant)."""
+    K_dr = el.lame + 2.0 * el.shear / el.dim
+    beta = el.biot ** 2 / K_dr
+
+    def g0(ctx):
+        return np.full(ctx.shape, beta * ctx.shift)[..., None, None]
+    return [CellJacobian(p, p, g0=g0, region=el.region)]
+
+
+def pressure_stabilisation_terms(el: Elastic, p: str, factor: float = 1.0) -> tuple[list, list]:
+    """Flow-equation perturbation tau int grad q . grad(dp/dt), tau = factor h^2 / (4 (lambda + 2G))
+    (Aguilar, Gaspar, Lisbona & Rodrigo 2008): removes the non-physical pressure
+    oscillations of the first steps when dt << h^2 / c; consistent to O(h^2)."""
+    tau0 = factor / (4 * (el.lame + 2 * el.shear))
+
+    def f1(ctx):
+        return tau0 * ctx.h[:, :, None, None] ** 2 * _grad_dot(ctx, p)
+
+    def g3(ctx):
+        t = tau0 * ctx.h[:, 0] ** 2 * ctx.shift
+        return (t[:, None, None] * np.eye(el.dim))[:, None, None, :, None, :]
+    return ([CellResidual(p, None, f1, region=el.region)],
+            [CellJacobian(p, p, g3=g3, region=el.region)])
