@@ -32,6 +32,7 @@ import pstats
 import statistics
 import sys
 import time
+from pathlib import Path
 
 import petsc4py
 
@@ -181,7 +182,7 @@ def write_report(rows, profile, repeat, out):
     """assembly.md: the table (with PETSc C times and ratios where measured) and a profile."""
     with open(os.path.join(out, "assembly.md"), "w") as f:
         f.write(f"# Assembly throughput (1 rank, P2 tetrahedra, PETSc {compat.version_string()})\n\n")
-        f.write("Medians of %d runs. Jacobian = values + MatSetValuesCOO + MatAssembly.\n\n" % repeat)
+        f.write(f"Medians of {repeat} runs. Jacobian = values + MatSetValuesCOO + MatAssembly.\n\n")
         f.write("| operator | cells | dofs | nonzeros | Jacobian (s) | residual (s) | Mnz/s "
                 "| PETSc C Jacobian (s) | ratio Jacobian | PETSc C residual (s) | ratio residual |\n")
         f.write("|---|---|---|---|---|---|---|---|---|---|---|\n")
@@ -218,7 +219,8 @@ def main():
     ap.add_argument("--report-from", help="only rewrite assembly.md from this assembly.csv")
     args = ap.parse_args()
     if args.report_from:
-        write_report(list(csv.DictReader(open(args.report_from))), "", args.repeat, args.out)
+        rows = list(csv.DictReader(Path(args.report_from).read_text().splitlines()))
+        write_report(rows, "", args.repeat, args.out)
         return
     os.makedirs(args.out, exist_ok=True)
     rows, profile = [], ""

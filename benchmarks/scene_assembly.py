@@ -68,8 +68,8 @@ def main():
           f"(creation = {1e3 * t_matrix / into:.2f} of these) | residual {res:.1f} ms "
           f"(medians of {args.repeat})")
     for region, a in problem.assemblers.items():
-        j = median_ms(lambda: a.jacobian_values(xl, xdl, 0.0, shift), max(3, args.repeat // 2))
-        r = median_ms(lambda: a.residual(xl, xdl, 0.0, shift), max(3, args.repeat // 2))
+        j = median_ms(lambda a=a: a.jacobian_values(xl, xdl, 0.0, shift), max(3, args.repeat // 2))
+        r = median_ms(lambda a=a: a.residual(xl, xdl, 0.0, shift), max(3, args.repeat // 2))
         print(f"  region {region}: full Jacobian {j:.1f} ms, residual {r:.1f} ms, {a.nnz} COO entries")
     if args.profile:
         import cProfile

@@ -19,7 +19,7 @@ def launcher_ranks(environ=os.environ) -> int:
 
 def _one_blas_thread_per_rank() -> None:
     """Under an MPI launcher with more than one rank, one BLAS thread per
-    rank unless the user set the thread counts (docs/performance.md, "BLAS
+    rank unless the user set the thread counts (manual, performance, "BLAS
     threads").  Ranks fill the cores; Debian's OpenBLAS (the pthread build)
     starts a thread per core in every rank and its threads spin on the
     cores the other ranks need (Scene 3 with three processes on two cores:

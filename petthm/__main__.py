@@ -13,10 +13,8 @@ def _help_requested(argv):
 
 def _scene_help(name):
     from petthm import params as P
-    from petthm.scenes import load_all
-    from petthm.scenes.base import REGISTRY
-    load_all()
-    cls = REGISTRY[name]
+    from petthm.scenes import scene_class
+    cls = scene_class(name)
     lines = [f"{name}: {cls.description}", "", "parameters (-option  default  unit  meaning):",
              P.help_text((P.RunParams,) + tuple(cls.parameters)), "",
              _water_help(cls),
@@ -37,11 +35,10 @@ def _water_help(cls) -> str:
 
 
 def _list_help():
-    from petthm.scenes import load_all
-    from petthm.scenes.base import REGISTRY
-    load_all()
+    from petthm.scenes import all_scenes
+    scenes = all_scenes()
     lines = [USAGE, "", "scenes:"]
-    lines += [f"  {n:<18} {REGISTRY[n].description}" for n in sorted(REGISTRY)]
+    lines += [f"  {n:<18} {scenes[n].description}" for n in sorted(scenes)]
     lines += ["", "python -m petthm SCENE -help lists a scene's parameters with units and defaults."]
     return "\n".join(lines)
 
@@ -135,7 +132,7 @@ def isolate_singleton(environ=os.environ) -> None:
     itself.  Open MPI is told so: no support daemon
     (``ess_singleton_isolated``: petthm never spawns processes) and the
     ob1 message layer rather than probing the network (UCX) for peers it
-    will never have.  Measured (docs/performance.md): the daemon 0.27 s,
+    will never have.  Measured (manual, performance): the daemon 0.27 s,
     the probe 0.20 s of a small run's start.  A value the user set wins;
     other MPI libraries ignore the variables."""
     if not any(v in environ for v in LAUNCHER_VARIABLES):
@@ -149,11 +146,9 @@ def main(argv=None) -> int:
     rest = argv[1:] if scene else argv
     rank = int(os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")))
     if _help_requested(argv):
-        from petthm.scenes import load_all
-        from petthm.scenes.base import REGISTRY
-        load_all()
-        if scene and scene not in REGISTRY:
-            return _fail(f"unknown scene '{scene}'; scenes: {', '.join(sorted(REGISTRY))}", rank)
+        from petthm.scenes import MODULES
+        if scene and scene not in MODULES:
+            return _fail(f"unknown scene '{scene}'; scenes: {', '.join(sorted(MODULES))}", rank)
         if rank == 0:
             print(_scene_help(scene) if scene else _list_help())
         return 0
@@ -177,11 +172,10 @@ def main(argv=None) -> int:
         from petsc4py import PETSc  # noqa: F401
     except Exception as e:           # petsc4py.PETSc.Error (the module may not be there to name it)
         return _fail(f"PETSc could not start with these options (error {e})", rank)
+    from petsc4py import PETSc
+
     from petthm.errors import InputError, WriteFailure
     from petthm.run.driver import run_scene
-    from petthm.scenes import load
-    load(scene)
-    from petsc4py import PETSc
     try:
         summary = run_scene(scene)
     except InputError as e:          # raised on every rank alike

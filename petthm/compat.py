@@ -25,7 +25,7 @@ if VERSION < MIN_VERSION:  # pragma: no cover - checked at import on old install
 
 INT = np.dtype(PETSc.IntType)
 SCALAR = np.dtype(PETSc.ScalarType)
-if SCALAR != np.float64:  # pragma: no cover
+if np.float64 != SCALAR:  # pragma: no cover
     raise ImportError("petthm needs a real, double-precision PETSc build")
 
 
@@ -47,7 +47,7 @@ def version_string() -> str:
 # --------------------------------------------------------------------------
 # ctypes bridge
 # --------------------------------------------------------------------------
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _lib() -> ctypes.CDLL:
     """The libpetsc already mapped into this process by petsc4py."""
     with open("/proc/self/maps") as maps:
@@ -96,7 +96,7 @@ def set_jacobian_domain_error(snes: PETSc.SNES) -> None:
 
 def ptap(A: PETSc.Mat, P: PETSc.Mat) -> PETSc.Mat:
     """P^T A P (petsc4py 3.18: ``Mat.PtAP``; renamed ``Mat.ptap`` later)."""
-    fn = getattr(A, "ptap", None) or getattr(A, "PtAP")
+    fn = getattr(A, "ptap", None) or A.PtAP
     return fn(P)
 
 
@@ -228,7 +228,7 @@ def unused_options() -> list[str]:
 _VP = ctypes.c_void_p
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _capsule(name: str):
     """A petsc4py C-API constructor, e.g. PyPetscDM_New(DM) -> petsc4py object."""
     cap = PETSc.__pyx_capi__[name]

@@ -12,7 +12,8 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-from typing import Any, Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
 
 from petsc4py import PETSc
 
@@ -285,5 +286,5 @@ class RunParams:
                                      kind=SOLVER)
     direct_max_unknowns: int = param(50000, "-", "scenes with displacement propose the block "
                                      "preconditioner of options/solvers/block.opts above this many "
-                                     "unknowns and a direct solve up to it (docs/solvers.md)", lo=0,
+                                     "unknowns and a direct solve up to it (manual, solver guide)", lo=0,
                                      kind=SOLVER)

@@ -32,6 +32,7 @@ import math
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -149,9 +150,8 @@ def run(tree: str, out: str, only: list[str]) -> None:
         cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", d, "-thm_quiet", *replace,
                *map(str, _translate(tree, case, opts))]
         p = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
-        s = json.load(open(os.path.join(d,
-                                        "summary.json"))) if os.path.exists(os.path.join(d, "summary.json")) \
-            else {}
+        path = os.path.join(d, "summary.json")
+        s = json.loads(Path(path).read_text()) if os.path.exists(path) else {}
         print(
             f"{case:28s} rc {p.returncode} {s.get('status')} {s.get('wall_time', {}).get('total', 0):7.1f} s",
               flush=True)
@@ -226,52 +226,70 @@ def _final_fields(d):
     return out
 
 
+def _compare_summaries(da: str, db: str, case: str, level: float):
+    """(largest difference, where, the values below FLOOR in both) of two summary.json."""
+    sa, sb = (_numbers(json.loads(Path(os.path.join(x, "summary.json")).read_text())) for x in (da, db))
+    worst, where, roundoff = 0.0, "", []
+    skip = ITERATION_KEYS if case in ITERATIVE else ()    # iteration counts near a tolerance: not results
+    for k in sorted(set(sa) | set(sb)):
+        if k in skip:
+            continue
+        r, ro = _rel(sa.get(k), sb.get(k), k, level)
+        if ro == "round-off" and sa.get(k) != sb.get(k):
+            roundoff.append(f"{k} {sa.get(k):.1e}/{sb.get(k):.1e}")
+        if r > worst:
+            worst, where = r, f"summary {k}: {sa.get(k)} vs {sb.get(k)}"
+    return worst, where, roundoff
+
+
+def _compare_histories(da: str, db: str, case: str, level: float):
+    """(largest difference, where, {tolerance-level column: largest abs. difference}) of two history.csv."""
+    ha, hb = _history(da), _history(db)
+    worst, where, tol_diff = 0.0, "", {}
+    skip = ITERATION_KEYS if case in ITERATIVE else ()
+    for k in sorted(set(ha) | set(hb)):
+        if k in skip:
+            continue
+        va, vb = ha.get(k, []), hb.get(k, [])
+        if len(va) != len(vb):
+            worst, where = math.inf, f"history {k}: {len(va)} vs {len(vb)} rows"
+            continue
+        for i, (x, y) in enumerate(zip(va, vb, strict=True)):
+            r, ro = _rel(x, y, k, level)
+            if ro == "tolerance" and x != y:
+                tol_diff[k] = max(tol_diff.get(k, 0.0), abs(x - y))
+            if r > worst:
+                worst, where = r, f"history {k} row {i}: {x} vs {y}"
+    return worst, where, tol_diff
+
+
+def _compare_fields(da: str, db: str):
+    """(largest relative difference, where) of the final outputs of two runs."""
+    fa, fb = _final_fields(da), _final_fields(db)
+    worst, where = 0.0, ""
+    for k in sorted(set(fa) | set(fb)):
+        if k not in fa or k not in fb or fa[k][0].shape != fb[k][0].shape:
+            worst, where = math.inf, f"{k} missing or of another size"
+            continue
+        r = float(np.abs(fa[k][0] - fb[k][0]).max()) / max(np.abs(fa[k][0]).max(), 1e-300)
+        if r > worst:
+            worst, where = r, k
+    return worst, where
+
+
 def diff(a: str, b: str) -> int:
     rows = []
-    for scene, case, _ in CASES:
+    for _scene, case, _ in CASES:
         da, db = os.path.join(a, case), os.path.join(b, case)
-        if not (os.path.exists(os.path.join(da,
-                                            "summary.json")) and os.path.exists(
-                                                os.path.join(db, "summary.json"))):
+        if not all(os.path.exists(os.path.join(d, "summary.json")) for d in (da, db)):
             rows.append((case, "missing", "", "", ""))
             continue
-        sa, sb = (_numbers(json.load(open(os.path.join(x, "summary.json")))) for x in (da, db))
-        worst, where, roundoff, tol_diff = 0.0, "", [], {}
         level = max(TOLERANCE_LEVEL, ITERATIVE.get(case, 0.0))
-        # the iteration counts of an iterative solve near its tolerance are not results
-        skip = ITERATION_KEYS if case in ITERATIVE else ()
-        for k in sorted(set(sa) | set(sb)):
-            if k in skip:
-                continue
-            r, ro = _rel(sa.get(k), sb.get(k), k, level)
-            if ro == "round-off" and sa.get(k) != sb.get(k):
-                roundoff.append(f"{k} {sa.get(k):.1e}/{sb.get(k):.1e}")
-            if r > worst:
-                worst, where = r, f"summary {k}: {sa.get(k)} vs {sb.get(k)}"
-        ha, hb = _history(da), _history(db)
-        for k in sorted(set(ha) | set(hb)):
-            if k in skip:
-                continue
-            va, vb = ha.get(k, []), hb.get(k, [])
-            if len(va) != len(vb):
-                worst, where = math.inf, f"history {k}: {len(va)} vs {len(vb)} rows"
-                continue
-            for i, (x, y) in enumerate(zip(va, vb)):
-                r, ro = _rel(x, y, k, level)
-                if ro == "tolerance" and x != y:
-                    tol_diff[k] = max(tol_diff.get(k, 0.0), abs(x - y))
-                if r > worst:
-                    worst, where = r, f"history {k} row {i}: {x} vs {y}"
-        fa, fb = _final_fields(da), _final_fields(db)
-        fworst, fwhere = 0.0, ""
-        for k in sorted(set(fa) | set(fb)):
-            if k not in fa or k not in fb or fa[k][0].shape != fb[k][0].shape:
-                fworst, fwhere = math.inf, f"{k} missing or of another size"
-                continue
-            ref = max(np.abs(fa[k][0]).max(), 1e-300)
-            r = float(np.abs(fa[k][0] - fb[k][0]).max()) / ref
-            if r > fworst:
-                fworst, fwhere = r, k
+        worst, where, roundoff = _compare_summaries(da, db, case, level)
+        hworst, hwhere, tol_diff = _compare_histories(da, db, case, level)
+        if hworst > worst:
+            worst, where = hworst, hwhere
+        fworst, fwhere = _compare_fields(da, db)
         notes = [f"below {FLOOR:g} in both: {', '.join(roundoff)}"] if roundoff else []
         notes += [f"tolerance-level {k}: max abs. difference {v:.1e}" for k, v in sorted(tol_diff.items())]
         rows.append((case, f"{worst:.1e}", where, f"{fworst:.1e}",

@@ -40,6 +40,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+from pathlib import Path
 
 import numpy as np
 from study_tables import ROOT, read_history, run_petthm, write_csv
@@ -146,7 +147,7 @@ def plot_mandel(out, rows):
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for ax, key, title, lim in zip(axes, ("p_max_rel", "cryer_peak_rel"),
                                    ("max nodal pressure error / p0", "Mandel-Cryer peak error / p0"),
-                                   (1e-2, 5e-3)):
+                                   (1e-2, 5e-3), strict=False):
         for deg, mk in (("1", "s--"), ("2", "o-")):
             sel = [r for r in rows if str(r["degree"]) == deg]
             ax.loglog([float(r["wall_s"]) for r in sel], [float(r[key]) for r in sel], mk,
@@ -201,7 +202,7 @@ def compare_lam(coarse: str, fine: str, lam0: float = 40e6):
     from scipy.interpolate import LinearNDInterpolator
 
     def times(d):
-        text = open(os.path.join(d, "fracture.xdmf")).read()
+        text = Path(os.path.join(d, "fracture.xdmf")).read_text()
         return [float(t) for t in re.findall(r'<Time Value="([^"]+)"', text)]
     with h5py.File(os.path.join(coarse, "fracture.h5")) as f, \
             h5py.File(os.path.join(fine, "fracture.h5")) as g:
@@ -221,7 +222,7 @@ def compare_lam(coarse: str, fine: str, lam0: float = 40e6):
 
 
 def read_csv(path):
-    return list(csv.DictReader(open(path)))
+    return list(csv.DictReader(Path(path).read_text().splitlines()))
 
 
 def plot_sneddon(out, rows):
@@ -230,7 +231,7 @@ def plot_sneddon(out, rows):
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for ax, key, title in zip(axes, ("centre_error", "l2_error"),
-                              ("opening at the centre", "opening, L2 over r < 0.95 R")):
+                              ("opening at the centre", "opening, L2 over r < 0.95 R"), strict=False):
         for dim in ("2", "3"):
             for deg, mk in (("1", "s--"), ("2", "o-")):
                 for pairing in PAIRINGS:

@@ -30,6 +30,7 @@ import argparse
 import csv
 import os
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 from study_tables import ROOT, run_petthm, write_csv
 
@@ -154,10 +155,10 @@ def main():
             rows = list(ex.map(lambda c: run_one(os.path.join(a.out, "runs"), *c), cases))
         if os.path.exists(path):          # keep rows of other schemes/levels from earlier runs
             done = {(r["scheme"], int(r["degree"]), int(r["level"])) for r in rows}
-            rows += [r for r in csv.DictReader(open(path))
+            rows += [r for r in csv.DictReader(Path(path).read_text().splitlines())
                      if (r.get("scheme", "beuler"), int(r["degree"]), int(r["level"])) not in done]
         write_csv(path, [{**r, "scheme": r.get("scheme") or "beuler"} for r in rows])
-    rows = list(csv.DictReader(open(path)))
+    rows = list(csv.DictReader(Path(path).read_text().splitlines()))
     plot(rows, a.out)
     md = table(rows)
     with open(os.path.join(a.out, "lauwerier_study.md"), "w") as f:

@@ -18,6 +18,7 @@ import argparse
 import json
 import os
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 from study_tables import ROOT, markdown, read_history, read_summary, run_petthm, write_csv, write_markdown
@@ -66,7 +67,7 @@ def plots(out):
         ax.semilogx(h["time"], h["production_temperature"], label=label)
         prof = os.path.join(d, "profile_1e8.json")
         if os.path.exists(prof):
-            p = json.load(open(prof))
+            p = json.loads(Path(prof).read_text())
             ax3.plot(p["x"], p["Tf"], label=label)
         rows.append({"case": name, "permeability": perm,
                      "T_prod_1e8": round(at(h, 1e8, "production_temperature"), 3),

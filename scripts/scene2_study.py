@@ -111,7 +111,7 @@ def fig5(out, name):
     panels = [(T[:, :2], T[:, 2], "Tf (degC)", "coolwarm"),
               (v[:, :2], v[:, 4] * 1e3, "aperture (mm)", "viridis"),
               (v[:, :2], v[:, 3] / 1e6, "contact traction lam (MPa)", "magma")]
-    for ax, (xy, val, title, cmap) in zip(axs, panels):
+    for ax, (xy, val, title, cmap) in zip(axs, panels, strict=False):
         x, y, c = mirrored(xy, val)
         tri = Triangulation(x, y)
         cs = ax.tricontourf(tri, c, levels=20, cmap=cmap)

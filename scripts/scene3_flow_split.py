@@ -21,6 +21,7 @@ import argparse
 import json
 import os
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -64,7 +65,7 @@ def viscosity_of(text: str) -> Viscosity:
 
 def flow_split(run: str, slab: float) -> list[dict]:
     """Rock and fracture flow across y = 0 at every output time of ``run``."""
-    prov = json.load(open(os.path.join(run, "summary.json")))["provenance"]["parameters"]
+    prov = json.loads(Path(os.path.join(run, "summary.json")).read_text())["provenance"]["parameters"]
     k = float(np.ravel(prov["-thm_rock_permeability"])[0])          # isotropic (Scene 3)
     visc = viscosity_of(str(prov["-thm_fluid_viscosity"]))
     import h5py
@@ -109,7 +110,7 @@ def main() -> int:
     text = "\n".join(lines) + "\n"
     print(text)
     if a.out:
-        open(a.out, "w").write(text)
+        Path(a.out).write_text(text)
     return 0
 
 

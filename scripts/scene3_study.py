@@ -183,7 +183,7 @@ def fig11(out, cases):
     import matplotlib.pyplot as plt
     from scipy.interpolate import LinearNDInterpolator
     fig, axs = plt.subplots(1, len(cases), figsize=(5.2 * len(cases), 4.6), squeeze=False)
-    for ax, c in zip(axs[0], cases):
+    for ax, c in zip(axs[0], cases, strict=False):
         d = run_dir(out, c)
         p = parameters(d)
         X, _, times, f = _series(output_with(d, "fields", "Tm"))
@@ -220,7 +220,7 @@ def fig12(out, cases):
     import matplotlib.pyplot as plt
     fig, ax1 = plt.subplots(figsize=(8, 5))
     ax2 = ax1.twinx()
-    for c, color in zip(cases, ("tab:blue", "tab:orange", "tab:green")):
+    for c, color in zip(cases, ("tab:blue", "tab:orange", "tab:green"), strict=False):
         d = run_dir(out, c)
         h, p = read_history(d), parameters(d)
         t = h["time"] / YEAR

@@ -68,7 +68,7 @@ def row_of(name, level, ranks, out, proc):
     s = read_summary(out)
     h = read_history(out)
     newton, krylov = h["snes_its"], h["ksp_its"]
-    per = [k / n for k, n in zip(krylov, newton) if n > 0]
+    per = [k / n for k, n in zip(krylov, newton, strict=False) if n > 0]
     costs = s.get("solver_costs", {})
     return {"solver": name, "level": level, "ranks": ranks, "unknowns": sum(s["dofs"].values()),
             "steps": s["steps"], "rejected": s["rejected_steps"],

@@ -36,10 +36,11 @@ def read_summary(out_dir: str) -> dict:
 
 
 def read_history(out_dir: str) -> dict[str, np.ndarray]:
-    """The run's history.csv as float columns, without the initial-state row."""
+    """The run's history.csv as float columns, without the initial-state row
+    (an empty cell, a monitor not evaluated at that step, is NaN)."""
     with open(os.path.join(out_dir, "history.csv")) as f:
         rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows[1:]]) for k in rows[0] if k}
+    return {k: np.array([float(r[k]) if r[k] != "" else np.nan for r in rows[1:]]) for k in rows[0] if k}
 
 
 def output_with(run: str, stem: str, name: str) -> str:

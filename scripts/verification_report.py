@@ -36,6 +36,7 @@ import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -376,7 +377,7 @@ def kept_convergence_section(doc: str) -> list[str]:
     kept as it was, with the line that says which run wrote it."""
     if not os.path.exists(doc):
         return []
-    text = open(doc).read().splitlines()
+    text = Path(doc).read_text().splitlines()
     written = next((ln for ln in text if ln.startswith("Written by")), "")
     start = text.index("## Convergence") if "## Convergence" in text else None
     if start is None:

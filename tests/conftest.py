@@ -1,3 +1,4 @@
+import csv
 import json
 import os
 import subprocess
@@ -19,6 +20,20 @@ def pytest_configure(config):
     petsc4py.init([sys.argv[0]])
 
 
+def read_text(path) -> str:
+    with open(path) as f:
+        return f.read()
+
+
+def read_json(path):
+    return json.loads(read_text(path))
+
+
+def read_csv(path) -> list[dict]:
+    """The rows of a CSV file (history.csv) as dicts."""
+    return list(csv.DictReader(read_text(path).splitlines()))
+
+
 def run_petthm(scene, outdir, *options, ranks=1, check=True, timeout=600):
     """Run ``python -m petthm SCENE`` (under mpiexec when ranks > 1); returns
     (CompletedProcess, summary dict or None)."""
@@ -31,7 +46,7 @@ def run_petthm(scene, outdir, *options, ranks=1, check=True, timeout=600):
     if check and proc.returncode != 0:
         raise AssertionError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
     path = os.path.join(outdir, "summary.json")
-    summary = json.load(open(path)) if os.path.exists(path) else None
+    summary = read_json(path) if os.path.exists(path) else None
     return proc, summary
 
 
@@ -54,7 +69,8 @@ def checkpoint_state(folder):
 def folder_digests(folder) -> dict:
     """SHA-256 of every file in a folder but the lock (which names its last holder)."""
     import hashlib
-    return {n: hashlib.sha256(open(os.path.join(folder, n), "rb").read()).hexdigest()
+    from pathlib import Path
+    return {n: hashlib.sha256(Path(folder, n).read_bytes()).hexdigest()
             for n in sorted(os.listdir(folder))
             if os.path.isfile(os.path.join(folder, n)) and n != ".petthm.lock"}
 
@@ -65,7 +81,7 @@ def ranks_of(mpiexec_pid) -> list[int]:
     for d in os.listdir("/proc"):
         if d.isdigit():
             try:
-                stat = open(f"/proc/{d}/stat").read()
+                stat = read_text(f"/proc/{d}/stat")
             except OSError:
                 continue
             if int(stat.rsplit(")", 1)[1].split()[1]) == mpiexec_pid:

@@ -357,7 +357,7 @@ def _write_history(path: Path, t, T, root: Path):
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["time_s", "T_out_degC", "T_lauwerier_degC"])
-        w.writerows(zip(t, T, ex))
+        w.writerows(zip(t, T, ex, strict=False))
 
 
 # ---------------------------------------------------------------- petthm
@@ -464,7 +464,7 @@ def _best(rows):
 
 def _interp_wall(pet, err):
     """petthm's wall time at error `err`, log-log between the bracketing runs of the graded series."""
-    for a, b in zip(pet, pet[1:]):                 # sorted by error, ascending
+    for a, b in zip(pet, pet[1:], strict=False):                 # sorted by error, ascending
         if a["error_K"] <= err <= b["error_K"]:
             if b["error_K"] == a["error_K"]:
                 return min(a["wall_s"], b["wall_s"])

@@ -27,8 +27,8 @@ solver tolerances are dimensionless.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -317,10 +317,8 @@ class Assembler:
         """sum_q W grad phi_i . f1 for test functions with gradients constant
         over the cell (P1): the cell integral of the flux against the
         physical basis gradients, (nc, nb, m)."""
-        if f1.shape[1] == 1:                                               # constant over the cell too
-            F = f1[:, 0] * W.sum(axis=1)[:, None, None]
-        else:
-            F = np.einsum("cq,cqma->cma", W, f1)
+        constant = f1.shape[1] == 1                                        # constant over the cell too
+        F = f1[:, 0] * W.sum(axis=1)[:, None, None] if constant else np.einsum("cq,cqma->cma", W, f1)
         B = self.basis_gradients(name, cells)                              # (nc, nb, d)
         r = B[:, :, None, 0] * F[:, None, :, 0]
         for a in range(1, B.shape[2]):
@@ -345,7 +343,7 @@ class Assembler:
         sums = self.sums
         for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
-            for jb, slab in zip(self.model.jacobians, sums.slabs):
+            for jb, slab in zip(self.model.jacobians, sums.slabs, strict=False):
                 if not sums.skips(slab, keep_constant):
                     K = self._cell_block(jb, ctx, cells)              # (nc, m, n, nbF, nbG)
                     rowfac = self._row_factors(jb.test, jb.trial, self.dofs(jb.test)[cells])

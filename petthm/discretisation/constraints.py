@@ -7,7 +7,7 @@
   evaluation.
 * A tie makes a matrix field's nodes on the fracture walls the fracture
   field's unknowns (pm = pf, and Tm = Tf with the ``equilibrium`` wall
-  exchange; docs/fracture.md): the tied dofs take the target's values and
+  exchange; manual, verification: fracture flow and heat): the tied dofs take the target's values and
   add their residual rows into the target's rows.
 
 The sum of the (SI) residual rows of constrained dofs is the consistent
@@ -15,8 +15,8 @@ reaction: the net inflow through those boundaries (``reaction``).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from petsc4py import PETSc

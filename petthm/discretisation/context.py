@@ -9,7 +9,7 @@ Kernels (``petthm.physics.kernels``) call only the public methods and properties
 """
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

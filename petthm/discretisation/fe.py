@@ -87,7 +87,7 @@ def _collapsed(dim: int, degree: int) -> tuple[np.ndarray, np.ndarray]:
     return pts, np.einsum("i,j,k->ijk", wu, wv, ww).ravel()
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def vertex_rule(dim: int) -> Rule:
     """The vertices of the reference simplex with equal weights (exact for
     P1; used for row-sum lumping of P1 mass-type terms)."""
@@ -210,14 +210,14 @@ def modified_basis(dim: int, degree: int) -> np.ndarray:
     return T
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def dual_coefficients(dim: int, degree: int) -> np.ndarray:
     """C (nb, nb) with the dual basis psi = C phi on the reference simplex:
     int psi_k phi~_j = delta_kj int phi~_k for the modified basis
     phi~ = T phi (``modified_basis``); psi = D M~^-1 T phi with M~ the mass
     matrix of phi~ and D = diag(int phi~).  The psi reproduce constants
     (sum_k psi_k = 1).  Used for contact multipliers: the weak opening
-    int psi_k g is then D_k g~_k, a nodal quantity (docs/contact.md)."""
+    int psi_k g is then D_k g~_k, a nodal quantity (manual, verification: contact)."""
     r = rule(dim, 2 * degree)
     phi = tabulate(dim, degree, r.points).phi
     M = phi.T @ (r.weights[:, None] * phi)
@@ -234,14 +234,14 @@ def tabulate_dual(dim: int, degree: int, points: np.ndarray) -> Tabulation:
     return Tabulation(t.phi @ C.T, np.einsum("qjd,kj->qkd", t.dphi, C), np.einsum("kj,jab->kab", C, t.hess))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def nodal_rule(dim: int, degree: int) -> Rule:
     """The Lagrange nodes with the weights int phi~_k of the modified basis
     (``modified_basis``): the rule under which a pointwise function of
     nodal values, tested with the Lagrange basis, gives the nodal rows
     D_k f(x_k) of the dual pairing (P1: the vertex rule; P2 segments:
     Simpson's rule; P2 triangles: weights 2 alpha/3 and (1 - 2 alpha)/3 of
-    the area).  Used for the friction law (docs/contact.md)."""
+    the area).  Used for the friction law (manual, verification: contact)."""
     r = rule(dim, 2 * degree)
     phi = tabulate(dim, degree, r.points).phi
     weights = modified_basis(dim, degree) @ (phi.T @ r.weights)

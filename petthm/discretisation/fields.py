@@ -10,8 +10,8 @@ the local vector and are built once, in the node order of ``fe.tabulate``.
 from __future__ import annotations
 
 import enum
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence, Union
 
 import numpy as np
 from petsc4py import PETSc
@@ -81,7 +81,7 @@ class Adjacent:
 
 #: a field name, the trace of a matrix field on a fracture face, or a matrix
 #: field in the rock cell next to a fracture face
-FieldRef = Union[str, Trace, Adjacent]
+FieldRef = str | Trace | Adjacent
 
 
 def base_field(ref: FieldRef) -> str:
@@ -92,11 +92,20 @@ def base_field(ref: FieldRef) -> str:
 @dataclass(frozen=True)
 class FieldSpec:
     """A primary field: name (also the fieldsplit prefix and output name),
-    number of components and Lagrange degree."""
+    number of components and Lagrange degree; its SI ``unit`` and the unit
+    its outputs are written in: output = SI value + ``output_offset``
+    (temperatures: kelvin inside, degrees Celsius out)."""
     name: str
     ncomp: int = 1
     degree: int = 2
     region: Domain = Domain.MATRIX
+    unit: str = ""
+    output_unit: str = ""
+    output_offset: float = 0.0
+
+    def output(self, values):
+        """SI values in the field's output unit."""
+        return values + self.output_offset if self.output_offset else values
 
 
 @dataclass
@@ -122,7 +131,7 @@ def boundary_entry(entry) -> tuple[str, tuple | None]:
 class Tie:
     """Matrix-field dofs on the fracture faces that are the fracture field's
     unknowns (pressure or temperature continuity imposed strongly, see
-    docs/fracture.md): local dofs of ``field`` and the global index of
+    manual, verification: fracture flow and heat): local dofs of ``field`` and the global index of
     ``target``'s dof at the same node."""
     field: str
     target: str
@@ -385,7 +394,7 @@ class Discretisation:
         """Number of unknowns per field (global, constrained dofs excluded)."""
         out = {}
         tied = np.concatenate([t.dofs for t in self.ties]) if self.ties else np.zeros(0, dtype=int)
-        for i, f in enumerate(self.fields):
+        for _i, f in enumerate(self.fields):
             dofs = np.setdiff1d(self.field_local_dofs(f.name).ravel(), tied)
             g = self.global_index[dofs]
             out[f.name] = self.mesh.dm.comm.tompi4py().allreduce(int(self._owned(g).sum()))

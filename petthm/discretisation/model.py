@@ -17,8 +17,11 @@ composed by the builders of ``petthm.physics.builders``.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Protocol
+
+import numpy as np
 
 from petthm.discretisation.fields import (  # noqa: F401
     Adjacent,
@@ -39,7 +42,7 @@ class Region:
     """A domain with a quadrature rule: ``lumped`` integrates with the vertex
     rule (row-sum lumping of P1 mass-type terms); ``dual``: Gauss, with the
     domain's own fields (the contact traction) in their dual basis
-    (``fe.tabulate_dual``; the multiplier pairing of docs/contact.md);
+    (``fe.tabulate_dual``; the multiplier pairing of manual, verification: contact);
     ``nodal``: the Lagrange nodes with the weights of the dual pairing
     (``fe.nodal_rule``; the friction law, a function of nodal values)."""
     domain: Domain = Domain.MATRIX
@@ -50,7 +53,7 @@ class Region:
     def _key(self) -> tuple:
         return (self.domain.value, self.lumped, self.dual, self.nodal)
 
-    def __lt__(self, other: "Region") -> bool:     # matrix after fracture, lumped after Gauss
+    def __lt__(self, other: Region) -> bool:     # matrix after fracture, lumped after Gauss
         return self._key() < other._key()
 
     def __str__(self) -> str:
@@ -69,8 +72,8 @@ MATRIX_LUMPED = Region(Domain.MATRIX, lumped=True)
 class CellResidual:
     """Residual of ``field`` on the cells: int f0 . v + f1 : grad v."""
     field: FieldRef
-    f0: Optional[Kernel] = None
-    f1: Optional[Kernel] = None
+    f0: Kernel | None = None
+    f1: Kernel | None = None
     region: Region = MATRIX
 
 
@@ -79,11 +82,11 @@ class CellJacobian:
     """d(residual of ``test``)/d(``trial``) (+ shift * d/d(trial_dot))."""
     test: FieldRef
     trial: FieldRef
-    g0: Optional[Kernel] = None
-    g1: Optional[Kernel] = None
-    g2: Optional[Kernel] = None
-    g3: Optional[Kernel] = None
-    g2_lap: Optional[Kernel] = None
+    g0: Kernel | None = None
+    g1: Kernel | None = None
+    g2: Kernel | None = None
+    g3: Kernel | None = None
+    g2_lap: Kernel | None = None
     region: Region = MATRIX
     #: the block depends on neither the state, the time nor the shift (a
     #: linear term with constant coefficients, e.g. elasticity): ``Problem``
@@ -97,12 +100,12 @@ class FacetTerm:
     field: str
     boundary: str
     f0: Kernel
-    g0: Optional[Kernel] = None
+    g0: Kernel | None = None
 
 
 @dataclass(frozen=True)
 class PointTerm:
-    """Residual terms at one node (a well, physics.md section 9).
+    """Residual terms at one node (a well, theory manual, "Equations: wells").
 
     ``residual(values, t)`` receives the SI values of ``fields`` at the node
     and returns {field: contribution}; ``jacobian(values, t)`` returns
@@ -119,6 +122,31 @@ class PointTerm:
 Terms = tuple[list, list]
 
 
+class ApertureLaw(Protocol):
+    """The hydraulic aperture of a deformable fracture, a(lam, opening)
+    (``physics.kernels.contact.JointLaw``)."""
+
+    def aperture(self, lam: np.ndarray, opening: np.ndarray) -> np.ndarray: ...
+
+
+class FrictionLaw(Protocol):
+    """The Coulomb bound of the shear traction, c0 + mu_f lam
+    (``physics.kernels.friction.Friction``)."""
+
+    def bound(self, lam: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class NodeOutputs:
+    """Values a model writes with a region's fields besides its unknowns:
+    ``fields(problem, t)`` returns {name: values at the nodes of the field
+    ``like``} (SI), written with that field (the contact's opening,
+    aperture, slip, ...)."""
+    region: Domain
+    like: str
+    fields: Callable
+
+
 @dataclass
 class Model:
     """The active fields and every term, each on its region.  ``bounds``
@@ -133,8 +161,11 @@ class Model:
     ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
     bounds: dict = field(default_factory=dict)    # {field: (lower, upper)} SI, None: unbounded
     preconditioner: list[CellJacobian] = field(default_factory=list)
-    aperture: Optional[object] = None             # kernels.contact.Aperture (deformable fracture; outputs)
-    friction: Optional[object] = None             # kernels.friction.Friction (outputs)
+    aperture_law: ApertureLaw | None = None   # a deformable fracture's a(lam, g) (outputs, monitors)
+    friction_law: FrictionLaw | None = None   # the Coulomb bound with friction (outputs, monitors)
+    outputs: list[NodeOutputs] = field(default_factory=list)
+    #: checks of the mesh a term is accurate on: ``check(mesh)`` returns a warning, or None
+    mesh_checks: list[Callable] = field(default_factory=list)
 
     def regions(self) -> list[Region]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

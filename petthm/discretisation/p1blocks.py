@@ -1,7 +1,7 @@
 """Jacobian terms of P1 functions summed over the cell before the basis
 gradients are applied (no physics in here): an ``Assembler`` method
 (``Assembler._constant_gradient_terms``), kept apart from the
-reference-tensor path of ``assembly.py``; docs/performance.md, "The
+reference-tensor path of ``assembly.py``; manual, performance, "The
 Jacobian of a P2-displacement scene"."""
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ def constant_gradient_terms(self, jb, ctx, cells, fast) -> np.ndarray:
     weighted by the trial (test) function's values.  No per-point
     J^-1 g J^-T and no product with the per-point reference tensors:
     the heat and flow blocks of a P2-displacement scene are integrated
-    with the displacement's 14-point rule (docs/performance.md)."""
+    with the displacement's 14-point rule (manual, performance)."""
     fF, fG = self.disc.field(jb.test), self.disc.field(jb.trial)
     m, n, d = fF.ncomp, fG.ncomp, self.mesh.dim
     W = self.W[cells]

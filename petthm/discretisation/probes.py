@@ -8,7 +8,7 @@ Scenes use these and no MPI calls of their own.
 """
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 

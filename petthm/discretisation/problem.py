@@ -1,7 +1,7 @@
 """A transient FE problem: state, residual and Jacobian callbacks, scaling.
 
 ``Problem`` holds the solution vector and evaluates F(t, X, Xdot) and
-dF/dX + shift dF/dXdot (TS's IFunction/IJacobian, physics.md section 10)
+dF/dX + shift dF/dXdot (TS's IFunction/IJacobian, theory manual, "Time stepping and solvers")
 from one ``assembly.Assembler`` per region of the model (the matrix
 cells, the fracture faces, and their lumped variants) plus the point terms
 of the wells.  The dofs that are not unknowns are ``constraints.Constraints``;
@@ -15,7 +15,8 @@ the scaling is ``assembly.FieldScale`` per field:
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from petsc4py import PETSc
@@ -25,6 +26,14 @@ from petthm.discretisation.assembly import Assembler, FieldScale
 from petthm.discretisation.constraints import Constraints, Dirichlet
 from petthm.discretisation.fields import Discretisation, Domain, base_field
 from petthm.discretisation.model import Model, PointTerm, Region
+
+
+@dataclass(frozen=True)
+class OnSides:
+    """An initial state ``values(x, inside)`` of a field that jumps across a
+    fracture: ``inside`` is, for each node, a point of a cell next to it
+    (``Problem.set_initial``)."""
+    values: Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 class Problem:
@@ -86,17 +95,17 @@ class Problem:
 
     def set_initial(self, funcs: dict[str, Callable[[np.ndarray], np.ndarray]]) -> None:
         """Fill X from initial-value functions of the node coordinates (SI);
-        a function with ``sided`` set (``scenes.base.on_sides``) also
-        receives, for each node, a point inside a cell of the node: the two
-        copies of a node on a fracture take the values of their sides."""
+        an ``OnSides`` function also receives, for each node, a point inside
+        a cell of the node: the two copies of a node on a fracture take the
+        values of their sides."""
         xl = self._Xl.getArray()
         xl[:] = 0.0
         for name, f in funcs.items():
             sc = self.scales[name]
             dofs = self.disc.field_local_dofs(name)
             x = self.disc.field_node_coordinates(name)
-            if getattr(f, "sided", False):     # a field discontinuous across a fracture: f(x, inside)
-                vals = np.asarray(f(x, self.disc.mesh.inside_points(self.disc.node_points(name))))
+            if isinstance(f, OnSides):         # a field discontinuous across a fracture: f(x, inside)
+                vals = np.asarray(f.values(x, self.disc.mesh.inside_points(self.disc.node_points(name))))
             else:
                 vals = np.asarray(f(x), dtype=float)
             xl[dofs] = (vals.reshape(dofs.shape) - sc.offset) / sc.scale
@@ -217,7 +226,7 @@ class Problem:
         if not np.isfinite(np.sum(values)):
             # a state where a property is not defined (mu(T) overflowing far outside the
             # fluid's range): Newton stops there and the step is cut, rather than a
-            # preconditioner built on NaN (docs/reliability.md)
+            # preconditioner built on NaN (manual, user guide: reliability)
             compat.set_jacobian_domain_error(ts.getSNES())
             values[~np.isfinite(values)] = 0.0
         compat.coo_set_values(P, values)
@@ -268,7 +277,7 @@ class Problem:
     def face_load_blocks(self) -> PETSc.Mat | None:
         """The Jacobian's terms whose test function is the displacement on a
         fracture region (the faces' loads: the fracture fluid pressure and
-        the contact traction on the walls, physics.md eq. (4)), without the
+        the contact traction on the walls, the theory manual eq. (4)), without the
         rock's body terms (Biot, thermal strain), at the last Jacobian's
         point; None when the model has none."""
         terms = [j for j in self.model.jacobians
@@ -308,7 +317,7 @@ class Problem:
         rowmax = None
         names, isets, _ = self.dm.createFieldDecomposition()
         out = {}
-        for name, iset in zip(names, isets):
+        for name, iset in zip(names, isets, strict=False):
             d = diag.getSubVector(iset)
             n = d.getSize()
             mean = d.norm(PETSc.NormType.NORM_1) / max(n, 1)

@@ -26,7 +26,7 @@ and star of mesh points); here it is vectorised over cells.
 from __future__ import annotations
 
 import itertools
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -65,7 +65,7 @@ def _masks(sets) -> np.ndarray:
     return np.array([sum(1 << i for i in s) for s in sets], np.intp)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _tables(dim: int, nnr: int, nnc: int):
     """Per ordering of a cell's vertices (``code`` = sum_i rank_i nv^i,
     rank_i the position of local vertex i in global order): the carrier and

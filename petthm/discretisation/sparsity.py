@@ -5,7 +5,7 @@ Element matrices repeat a nonzero once for every cell that holds both of its
 nodes: about 2.5 times for P2 tetrahedra, about 6 times for P1.  PETSc's COO
 preallocation sorts every entry it is given; handed the element entries, it
 cost 4-6 Jacobian assemblies at 1e4-2.3e4 P2 tetrahedra and 15 at a million
-unknowns (docs/performance.md).  So each block of the Jacobian (a pair of
+unknowns (manual, performance).  So each block of the Jacobian (a pair of
 fields over one set of elements) is summed here first:
 
 * once, at set-up, the node pairs of its element matrices are numbered
@@ -25,8 +25,8 @@ displacement block.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

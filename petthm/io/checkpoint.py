@@ -1,4 +1,4 @@
-"""Checkpoint, restart and stop requests (physics.md section 12, issue 15).
+"""Checkpoint, restart and stop requests (manual, user guide).
 
 ``checkpoint.h5`` in the output folder holds what a run needs to continue:
 the state X (each rank's owned mesh points' values), the time, the next step size, the step number and the
@@ -23,6 +23,7 @@ writes a checkpoint and stops with status ``interrupted``.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 
@@ -271,10 +272,8 @@ class StopRequest:
     def install(self) -> None:
         for name in SIGNALS:
             sig = getattr(signal, name)
-            try:
+            with contextlib.suppress(ValueError):  # not the main thread (an embedding application)
                 self._previous[sig] = signal.signal(sig, self._handle)
-            except ValueError:                     # not the main thread (an embedding application)
-                pass
 
     def _handle(self, signum, frame) -> None:
         self.received = signal.Signals(signum).name

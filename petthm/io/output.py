@@ -1,6 +1,6 @@
 """Run output: summary.json, history.csv and P1/P2 fields in XDMF/HDF5.
 
-physics.md section 12.  Each rank writes its own part of the fields into
+manual, user guide.  Each rank writes its own part of the fields into
 ``fields.h5`` (h5py, ranks in turn: ``in_turns``); ``fields.xdmf`` describes the time series
 (``Triangle``/``Tetrahedron`` for P1, ``Triangle_6``/``Tetrahedron_10`` for
 P2, VTK node order) so that ParaView or meshio can read it.  Values are in SI
@@ -8,10 +8,11 @@ units, temperatures in degrees Celsius.
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import os
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -36,7 +37,7 @@ class History:
 
         def start():
             keep = append and os.path.isfile(path)
-            self._file = open(path, "a" if keep else "w", newline="")
+            self._file = open(path, "a" if keep else "w", newline="")     # noqa: SIM115 - open for the run
             self._writer = csv.writer(self._file)
             if not keep:
                 self._writer.writerow(self.columns)
@@ -51,10 +52,8 @@ class History:
 
     def close(self) -> None:
         if self._file is not None:
-            try:
+            with contextlib.suppress(OSError):  # the last flush on a full disk: the rows written stay
                 self._file.close()
-            except OSError:             # the last flush on a full disk: the rows written stay
-                pass
             self._file = None
 
 

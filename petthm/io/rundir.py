@@ -1,6 +1,6 @@
 """The output folder of a run: its lock, its manifest, and the rule that a
 run never replaces another run's output without being asked (manual:
-"Output folder", physics.md section 12).
+"Output folder", manual, user guide).
 
 * **Lock.**  Rank 0 holds an advisory lock (``fcntl.flock``) on
   ``DIR/.petthm.lock`` for the life of the run, with ``host:pid`` written in
@@ -123,7 +123,7 @@ class RunFolder:
     def _take_lock(self) -> None:
         import fcntl
         path = os.path.join(self.path, LOCK)
-        f = open(path, "a+")
+        f = open(path, "a+")                    # noqa: SIM115 - held open: the lock lives as long as it
         try:
             fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

@@ -1,4 +1,4 @@
-"""Cohesive split of a DMPlex along its fractures (physics.md section 1).
+"""Cohesive split of a DMPlex along its fractures (theory manual, "Unknowns").
 
 Each fracture is a set of facets (gmsh physical group ``FRACTURE_TAG0 + i``,
 read into the "Face Sets" label).  Following PyLith's recipe, on the serial
@@ -271,7 +271,7 @@ def split_statistics(dm: PETSc.DMPlex, normals: list[np.ndarray]) -> dict:
     for k in range(len(normals)):
         for c in _stratum(dm, f"thm_fracture_{k}", 1):
             frac_of[int(c)] = k
-    for m, p, a, b in zip(minus, plus, vm, vp):
+    for m, p, a, _b in zip(minus, plus, vm, vp, strict=False):
         xf = X[a].mean(axis=0)
         k = frac_of.get(int(m), frac_of.get(int(p), 0))
         for face, sign in ((m, -1), (p, +1)):

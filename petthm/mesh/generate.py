@@ -6,9 +6,11 @@ midpoints itself.  Sizes are characteristic lengths in metres.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 
@@ -73,10 +75,7 @@ def box(path: str, lengths: Sequence[float], size: float, grading: Grading | Non
     dim = len(lengths)
     gmsh = _start("box")
     occ = gmsh.model.occ
-    if dim == 2:
-        tag = occ.addRectangle(0, 0, 0, *lengths)
-    else:
-        tag = occ.addBox(0, 0, 0, *lengths)
+    tag = occ.addRectangle(0, 0, 0, *lengths) if dim == 2 else occ.addBox(0, 0, 0, *lengths)
     occ.synchronize()
     if structured:
         for (_, c) in gmsh.model.getEntities(1):
@@ -178,7 +177,7 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     if grading_distance > 0:
         mf = gmsh.model.mesh.field
         fields = []
-        for f, m in zip(fractures, mapping[1:]):
+        for f, m in zip(fractures, mapping[1:], strict=False):
             ents = [t for (d, t) in m if d == dim - 1]
             fields.append(_threshold(mf, "CurvesList" if dim == 2 else "SurfacesList", ents,
                                      f.size or size, size, grading_distance))
@@ -428,11 +427,19 @@ def _threshold(mf, kind: str, ents, size_min: float, size_max: float, distance: 
 
 #: the largest mesh a generator may make (cells), ``set_cell_limit``
 #: (-thm_max_cells); gmsh needs ~1 kB per tetrahedron and petthm ~10x that
-CELL_LIMIT = [5_000_000]
+#: the most cells a generated mesh may have (-thm_max_cells), for the meshing in the ``with
+#: cell_limit(n)`` block that sets it
+CELL_LIMIT: contextvars.ContextVar[int] = contextvars.ContextVar("cell_limit", default=5_000_000)
 
 
-def set_cell_limit(cells: int) -> None:
-    CELL_LIMIT[0] = int(cells)
+@contextlib.contextmanager
+def cell_limit(cells: int):
+    """Mesh generation in this block refuses more than ``cells`` cells."""
+    token = CELL_LIMIT.set(int(cells))
+    try:
+        yield
+    finally:
+        CELL_LIMIT.reset(token)
 
 
 def fewest_cells(volume: float, size: float, dim: int) -> float:
@@ -459,10 +466,10 @@ def _check_cell_limit(gmsh, dim: int) -> None:
         box = np.asarray(gmsh.model.getBoundingBox(-1, -1))
         volume = float(np.prod((box[3:] - box[:3])[:dim]))
     cells = fewest_cells(volume, size, dim)
-    if cells > CELL_LIMIT[0]:
+    if cells > CELL_LIMIT.get():
         gmsh.finalize()
         raise InputError(f"mesh size {size:g} m would make at least {cells:.2g} cells on this domain, more "
-                         f"than the limit {CELL_LIMIT[0]:.3g} (-thm_max_cells): choose a larger "
+                         f"than the limit {CELL_LIMIT.get():.3g} (-thm_max_cells): choose a larger "
                          "-thm_mesh_size (or raise -thm_max_cells on a machine with the memory)")
 
 

@@ -1,4 +1,4 @@
-"""A layered mesh around an inclined disc fracture (Scene 3; issue 16 item 2).
+"""A layered mesh around an inclined disc fracture (Scene 3).
 
 The rock's thermal boundary layer next to a fracture is thin (sqrt(kappa t):
 0.3 m after a day, 19 m after ten years for kappa = 1.15e-6 m2/s).  Isotropic tetrahedra
@@ -32,7 +32,7 @@ so vertical wells stay lines of the mesh.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -156,7 +156,7 @@ def _place_levels(gmsh, N: int, half: float, tan: float, shared: np.ndarray, rat
     H = np.where(up, half - zp, half + zp)
     z = zp + np.where(up, 1.0, -1.0) * level_heights(shared, ratio, count, H, k)
     z[k == N] = np.where(up, half, -half)[k == N]
-    for t, x, y, zz in zip(tags, X[:, 0], X[:, 1], z):
+    for t, x, y, zz in zip(tags, X[:, 0], X[:, 1], z, strict=False):
         gmsh.model.mesh.setNode(int(t), [x, y, zz], [])
 
 

@@ -9,8 +9,8 @@ assembly needs are built once, without a Python loop over cells.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Callable, Mapping
 
 import numpy as np
 from petsc4py import PETSc
@@ -99,7 +99,7 @@ def label_boundaries(dm: PETSc.DMPlex, parts: Mapping[str, BoundaryPredicate]) -
     dm.removeLabel("thm_boundary_all")
 
 
-def _label_interior(label, topo: "VertexTopology", predicate: BoundaryPredicate) -> None:
+def _label_interior(label, topo: VertexTopology, predicate: BoundaryPredicate) -> None:
     """The vertices on which ``predicate`` holds and the edges joining two of them."""
     on = np.asarray(predicate(topo.coords), dtype=bool)
     for v in np.flatnonzero(on):

@@ -1,4 +1,4 @@
-"""Global mass and energy balance per time step (physics.md section 7).
+"""Global mass and energy balance per time step (theory manual, "Equations: fracture heat").
 
 For a conserved quantity Q (fluid volume, or energy) with stored amount
 

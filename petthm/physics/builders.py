@@ -1,11 +1,11 @@
-"""Model builders: the coupled physics of physics.md composed into a ``Model``.
+"""Model builders: the coupled physics of the theory manual composed into a ``Model``.
 
 A scene creates a ``ModelBuilder`` with its parameters and calls the
 builders of the physics it has, in any order; each builder adds its fields
 and terms and keeps the kernel objects that later builders couple to:
 
 =====================  =======================================  ===========
-builder                physics (physics.md section)             fields
+builder                physics (the theory manual)             fields
 =====================  =======================================  ===========
 ``elasticity``         thermo-poro-elastic rock (2), Biot (5)    u
 ``matrix_flow``        Darcy flow with storage (5)              pm
@@ -27,14 +27,15 @@ term is one kernel (``petthm/physics/kernels``) and one builder here.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Callable, Optional
 
 import numpy as np
 
 from petthm.discretisation.fields import FieldSpec
-from petthm.discretisation.model import FRACTURE, FRACTURE_DUAL, Domain, Model, PointTerm, traces
+from petthm.discretisation.model import FRACTURE, FRACTURE_DUAL, Domain, Model, NodeOutputs, PointTerm, traces
 from petthm.errors import InputError
+from petthm.params import CELSIUS
 from petthm.physics.kernels import contact as ct
 from petthm.physics.kernels import flow as fk
 from petthm.physics.kernels import friction as fr
@@ -42,12 +43,35 @@ from petthm.physics.kernels import heat as hk
 from petthm.physics.kernels import poroelastic as pe
 from petthm.physics.kernels.wallflux import WallConduction
 from petthm.physics.materials import NUSSELT
+from petthm.physics.monitors import contact_outputs
 
 #: canonical order of the fields (the order of the unknowns in the section)
 FIELD_ORDER = ("u", "lam", "tau", "pf", "pm", "Tf", "Tm")
 
 #: shift of the contact function relative to the displacement scale (kernels/contact.py)
 GAP_TOLERANCE = 1e-12
+
+
+#: rock layers thinner than this fraction of the fracture's cells: the SUPG wall term over/undershoots
+THIN_WALL_LAYER = 0.05
+
+
+def thin_wall_layers(mesh) -> str | None:
+    """-thm_fracture_supg_wall_conduction on a mesh whose rock cells next to
+    the fracture are much thinner than its cells: a warning (measured: Tf
+    left [Tinj, T0] by 0.1-1.3 % at ratios 0.005-0.02 in Scene 1 and by 6 %
+    at 0.025 in Scene 2, 0 % at 0.05; manual: verification, fracture flow
+    and heat); None on a mesh without such layers (collective)."""
+    ratio = mesh.fracture.thinnest_wall_layer() if mesh.fracture is not None else float("inf")
+    if ratio >= THIN_WALL_LAYER:
+        return None
+    return (f"-thm_fracture_supg_wall_conduction on rock layers {ratio:.3g} times as thick as the "
+            f"fracture's cells (< {THIN_WALL_LAYER:g}): Tf left [Tinj, T0] by up to 6 % on meshes with such "
+            "layers; check Tf_bounds_violation")
+
+
+#: temperatures are kelvin inside and degrees Celsius in every output
+TEMPERATURE = {"unit": "K", "output_unit": "degC", "output_offset": -CELSIUS}
 
 
 class ModelBuilder:
@@ -60,10 +84,10 @@ class ModelBuilder:
     def __init__(self, p, dim: int):
         self.p, self.dim = p, dim
         self.model = Model()
-        self.elastic: Optional[pe.Elastic] = None
-        self.mechanics: Optional[ct.FractureMechanics] = None
-        self.aperture: Optional[ct.Aperture] = None
-        self.frictional: Optional[fr.Friction] = None
+        self.elastic: pe.Elastic | None = None
+        self.mechanics: ct.FractureMechanics | None = None
+        self.aperture: ct.Aperture | None = None
+        self.frictional: fr.Friction | None = None
         self.flows: dict = {}
         self.heats: dict = {}
 
@@ -81,19 +105,19 @@ class ModelBuilder:
             kw.update(T="Tm", thermal_expansion=p.rock_thermal_expansion, T_ref=p.T0)
         self.elastic = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, self.dim,
                                   body_force=body_force, **kw)
-        self.model.add_field(FieldSpec("u", self.dim, degree))
+        self.model.add_field(FieldSpec("u", self.dim, degree, unit="m"))
         self.model.add(pe.elastic_terms(self.elastic))
         return self.elastic
 
     def matrix_flow(self, degree: int, *, permeability: np.ndarray, storage: float,
                     thermal_storage: float = 0.0, heat: bool = False,
-                    source: Optional[Callable] = None) -> fk.Flow:
+                    source: Callable | None = None) -> fk.Flow:
         """pm: S dp/dt - B dT/dt + div(-k/mu grad p) = s (with ``heat``: mu(Tm), B;
         ``source`` s(x, t), 1/s: the manufactured solutions)."""
         fl = fk.Flow(Domain.MATRIX, "pm", "Tm" if heat else None, storage, permeability,
                      self.p.fluid_viscosity,
                      thermal_storage if heat else 0.0, source=source)
-        self.model.add_field(FieldSpec("pm", 1, degree))
+        self.model.add_field(FieldSpec("pm", 1, degree, unit="Pa"))
         self.model.add(fk.flow_terms(fl))
         self.flows[Domain.MATRIX] = fl
         return fl
@@ -102,8 +126,8 @@ class ModelBuilder:
         """The pressure stabilisation of the Biot flow equation (kernels/poroelastic.py)."""
         self.model.add(pe.pressure_stabilisation_terms(self.elastic, "pm", factor))
 
-    def matrix_heat(self, degree: int, *, capacity: Optional[float] = None, conductivity=None,
-                    lumped: bool = False, velocity=None, source: Optional[Callable] = None,
+    def matrix_heat(self, degree: int, *, capacity: float | None = None, conductivity=None,
+                    lumped: bool = False, velocity=None, source: Callable | None = None,
                     supg: bool = True, reference_temperature: float = 0.0) -> hk.Heat:
         """Tm in conservative form (kernels/heat.py), advected by the
         matrix flow if there is one, or by a prescribed ``velocity``; the
@@ -119,14 +143,14 @@ class ModelBuilder:
                     p.fluid_rho_c if advect else 0.0, flow, velocity=velocity,
                     source=source, reference_temperature=reference_temperature, degree=degree, supg=supg,
                     lumped=lumped, biot=biot)
-        self.model.add_field(FieldSpec("Tm", 1, degree))
+        self.model.add_field(FieldSpec("Tm", 1, degree, **TEMPERATURE))
         self.model.add(hk.heat_terms(h))
         self.heats[Domain.MATRIX] = h
         return h
 
     # -- fracture mechanics ----------------------------------------------------------------
-    def contact(self, *, normal_stress: float, u_scale: float, pressure: Optional[Callable] = None,
-                insitu_stress: Optional[np.ndarray] = None) -> ct.FractureMechanics:
+    def contact(self, *, normal_stress: float, u_scale: float, pressure: Callable | None = None,
+                insitu_stress: np.ndarray | None = None) -> ct.FractureMechanics:
         """lam >= 0 with the face loads pf + lam + sigma0_nn on u+-
         (kernels/contact.py); the fluid pressure is the field pf (when the
         model has fracture flow) or a prescribed ``pressure(x, t)``.
@@ -146,9 +170,10 @@ class ModelBuilder:
                                               gap_tolerance=GAP_TOLERANCE * u_scale,
                                               pairing=FRACTURE_DUAL if dual else FRACTURE)
         degree = self.model.spec("u").degree if dual else 1
-        self.model.add_field(FieldSpec("lam", 1, degree, Domain.FRACTURE))
+        self.model.add_field(FieldSpec("lam", 1, degree, Domain.FRACTURE, unit="Pa"))
         self.model.add(ct.fracture_mechanics_terms(self.mechanics))
         self.model.bounds["lam"] = (0.0, None)
+        self.model.outputs.append(NodeOutputs(Domain.FRACTURE, "lam", contact_outputs))
         if self.p.fracture_friction > 0 or self.p.fracture_cohesion > 0:
             self.friction(degree, dual)
         return self.mechanics
@@ -161,8 +186,8 @@ class ModelBuilder:
         p = self.p
         self.frictional = fr.Friction(self.mechanics, p.fracture_friction, p.fracture_cohesion,
                                       p.rock_youngs_modulus)
-        self.model.add_field(FieldSpec("tau", self.dim - 1, degree, Domain.FRACTURE))
-        self.model.friction = self.frictional
+        self.model.add_field(FieldSpec("tau", self.dim - 1, degree, Domain.FRACTURE, unit="Pa"))
+        self.model.friction_law = self.frictional
         self.model.add(fr.friction_terms(self.frictional))
         return self.frictional
 
@@ -174,12 +199,12 @@ class ModelBuilder:
     def deformable(self, mechanics: ct.FractureMechanics) -> ct.Aperture:
         """The aperture a(lam, g) that fracture flow and heat use."""
         self.aperture = ct.Aperture(mechanics, self.joint_law())
-        self.model.aperture = self.aperture
+        self.model.aperture_law = self.aperture.law
         return self.aperture
 
     # -- fracture flow and heat -------------------------------------------------------------
     def fracture_flow(self, degree: int, *, reference_aperture: float, heat: bool = False,
-                      compressibility: Optional[float] = None, source: Optional[Callable] = None) -> fk.Flow:
+                      compressibility: float | None = None, source: Callable | None = None) -> fk.Flow:
         """pf: cubic-law flow on the fracture with storage a c_f (- a beta_f dTf/dt
         with ``heat``), mu(Tf); per unit aperture on a deformable fracture."""
         p = self.p
@@ -188,18 +213,18 @@ class ModelBuilder:
         beta = a * p.fluid_thermal_expansion if heat else 0.0
         fl = fk.Flow(Domain.FRACTURE, "pf", "Tf" if heat else None, a * cf, a ** 3 / 12 * np.eye(self.dim),
                      p.fluid_viscosity, beta, aperture=self.aperture, source=source)
-        self.model.add_field(FieldSpec("pf", 1, degree, Domain.FRACTURE))
+        self.model.add_field(FieldSpec("pf", 1, degree, Domain.FRACTURE, unit="Pa"))
         self.model.add(fk.flow_terms(fl))
         self.flows[Domain.FRACTURE] = fl
         return fl
 
     def leakoff(self) -> None:
         """Leakoff: the matrix pressure on the walls is the fracture pressure
-        (a tie, docs/fracture.md), so the Darcy flux through the walls is L."""
+        (a tie, manual, verification: fracture flow and heat), so the Darcy flux through the walls is L."""
         self.model.ties["pm"] = "pf"
 
     def fracture_heat(self, degree: int, *, reference_aperture: float, lumped: bool = False,
-                      supg: bool = True, source: Optional[Callable] = None) -> hk.Heat:
+                      supg: bool = True, source: Callable | None = None) -> hk.Heat:
         """Tf: advection-conduction in the fracture and the wall exchange
         with the rock (``-thm_fracture_heat_exchange``): equilibrium ties the
         wall nodes of Tm to Tf; otherwise hw (Tf - Tm) on both faces, with
@@ -222,7 +247,7 @@ class ModelBuilder:
         h = hk.Heat(Domain.FRACTURE, "Tf", a * p.fluid_rho_c, a * p.fluid_conductivity, p.fluid_rho_c,
                     self.flows[Domain.FRACTURE], degree=degree, supg=supg, aperture=self.aperture,
                     source=source)
-        self.model.add_field(FieldSpec("Tf", 1, degree, Domain.FRACTURE))
+        self.model.add_field(FieldSpec("Tf", 1, degree, Domain.FRACTURE, **TEMPERATURE))
         if hw is not None:
             self.model.add(hk.heat_terms(h))
         self.heats[Domain.FRACTURE] = h          # tied: its terms in build(), with the rock's wall flux
@@ -240,6 +265,7 @@ class ModelBuilder:
         if rock is not None and h.supg and h.advects and self.p.fracture_supg_wall_conduction:
             h = replace(h, wall=WallConduction(rock.T, rock.conductivity))
             self.heats[Domain.FRACTURE] = h
+            self.model.mesh_checks.append(thin_wall_layers)
         self.model.add(hk.heat_terms(h))
 
     # -- the model ------------------------------------------------------------------------

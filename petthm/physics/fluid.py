@@ -1,4 +1,4 @@
-"""Fluid properties (physics.md section 8)."""
+"""Fluid properties (theory manual, "Equations: fluid properties")."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -37,21 +37,21 @@ def check_liquid(option: str, T: float, p_abs: float, where: str) -> None:
                          f"absolute ({where}); IAPWS-IF97 region 1 needs 611.2 Pa to 100 MPa")
     lo, hi = bounds
     edge = hi == REGION1_T_MAX_C                     # region 1 holds T = 350 degC; boiling water does not
-    if not (T > lo and (T <= hi if edge else T < hi)):
+    if not (lo < T and (hi >= T if edge else hi > T)):
         bound = f"T <= {hi:g} degC, the edge of region 1" if edge else f"T < {hi:.4g} degC, boiling"
         raise InputError(f"option -{option} = {T:g} degC is not liquid water at {p_abs / 1e6:.6g} MPa "
                          f"absolute ({where}): IAPWS-IF97 region 1 needs {lo:g} degC < T and {bound}")
 
 
 def water_viscosity(T, lib=np):
-    """mu(T) of water in Pa s, T in kelvin (physics.md section 8); ``lib``:
+    """mu(T) of water in Pa s, T in kelvin (theory manual, "Equations: fluid properties"); ``lib``:
     numpy, or sympy for the symbolic form."""
     return lib.exp(-52.843 + 3703.6 / T + 5.866 * lib.log(T) - 5.88e-29 * T ** 10)
 
 
 @dataclass(frozen=True)
 class Viscosity:
-    """mu(T) in Pa s: a constant, or water (physics.md section 8, T in kelvin):
+    """mu(T) in Pa s: a constant, or water (theory manual, "Equations: fluid properties", T in kelvin):
     mu = exp(-52.843 + 3703.6/T + 5.866 ln T - 5.88e-29 T^10).
 
     ``mobility(T)`` returns 1/mu and its derivative d(1/mu)/dT."""
@@ -78,7 +78,7 @@ class Viscosity:
         return m, -m * dlnmu
 
     @staticmethod
-    def parse(text: str) -> "Viscosity":
+    def parse(text: str) -> Viscosity:
         """'-thm_fluid_viscosity': a positive number (Pa s) or 'water'."""
         if str(text).strip().lower() == "water":
             return Viscosity(water=True)

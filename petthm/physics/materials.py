@@ -1,4 +1,4 @@
-"""The physical parameters: every option of physics.md section 12 (and the
+"""The physical parameters: every option of manual, user guide (and the
 few more the builders read) declared once, with its unit, help, range and
 one type.
 
@@ -26,7 +26,7 @@ from petthm.errors import InputError
 from petthm.params import CELSIUS, DISCRETISATION, PHYSICS, param
 from petthm.physics.fluid import Viscosity
 
-#: Nusselt number of laminar flow between parallel plates (physics.md section 7)
+#: Nusselt number of laminar flow between parallel plates (theory manual, "Equations: fracture heat")
 NUSSELT = 7.54
 
 
@@ -40,7 +40,7 @@ def parse_viscosity(text: str) -> Viscosity:
 
 @dataclass(frozen=True)
 class Exchange:
-    """The wall heat exchange (physics.md section 7): ``equilibrium``
+    """The wall heat exchange (theory manual, "Equations: fracture heat"): ``equilibrium``
     (Tm = Tf on the walls), ``nusselt`` (hw = Nu lambda_f / (2 a)) or a given hw."""
     mode: str                       # "equilibrium", "nusselt" or "given"
     hw: float = 0.0                 # W/(m2 K), mode "given"
@@ -77,7 +77,7 @@ VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
 
 @dataclass(frozen=True)
 class InSituStress:
-    """The in-situ total stress (compression positive, physics.md section 2):
+    """The in-situ total stress (compression positive, theory manual, "Equations: rock deformation"):
     one number (the normal stress on every fracture, no shear on it) or the
     tensor sxx,syy,szz,syz,sxz,sxy (2D scenes: the x-y plane)."""
     components: tuple
@@ -90,7 +90,7 @@ class InSituStress:
         if len(self.components) == 1:
             return None
         S = np.zeros((3, 3))
-        for (i, j), v in zip(VOIGT, self.components):
+        for (i, j), v in zip(VOIGT, self.components, strict=False):
             S[i, j] = S[j, i] = v
         return S
 
@@ -104,7 +104,7 @@ class InSituStress:
         return float(n3 @ S @ n3)
 
     def check_frictionless(self, n) -> None:
-        """A frictionless fracture carries no in-situ shear (physics.md sections 2-3)."""
+        """A frictionless fracture carries no in-situ shear (theory manual, "Equations: rock deformation")."""
         S = self.tensor
         if S is None:
             return
@@ -135,7 +135,7 @@ def parse_insitu_stress(text) -> InSituStress:
 _POS = dict(lo=0.0, lo_open=True)
 
 DECLARED = {
-    # rock (physics.md sections 2, 5, 6)
+    # rock (theory manual, "Equations: rock deformation")
     "rock_youngs_modulus": param(37.5e9, "Pa", "drained Young's modulus E", **_POS, kind=PHYSICS),
     "rock_poisson_ratio": param(0.25, "-", "drained Poisson ratio nu", lo=0.0, hi=0.4999, kind=PHYSICS),
     "rock_biot_coefficient": param(0.8, "-", "Biot coefficient alpha", lo=0.0, hi=1.0, kind=PHYSICS),
@@ -164,7 +164,7 @@ DECLARED = {
                                         kind=PHYSICS),
     "contact_pairing": param("dual", "-", "how the contact traction meets the opening: dual (lam on the "
                              "nodes of the u trace, dual basis: nodal contact for P1 and P2 u) or consistent "
-                             "(P1 lam, L2 pairing: the scheme before issue 13)",
+                             "(P1 lam, L2 pairing)",
                              choices=("dual", "consistent"), kind=DISCRETISATION),
     "fracture_friction": param(0.6, "-", "Coulomb friction coefficient mu_f of the fracture faces "
                                "(0: frictionless; 0.6: Byerlee's rock friction)", lo=0.0, kind=PHYSICS),
@@ -176,7 +176,8 @@ DECLARED = {
                                            "conduction in the fracture heat's SUPG residual (consistent "
                                            "SUPG: P2 reaches its accuracy; over- or undershoots by "
                                            "1-6 % where the wall layers are thin against the fracture "
-                                           "cells; docs/fracture_th.md)", kind=DISCRETISATION),
+                                           "cells; manual, verification: fracture flow and heat)",
+                                           kind=DISCRETISATION),
     # state and wells (sections 2, 9)
     "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0", kind=PHYSICS),
     "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0", kind=PHYSICS),
@@ -193,7 +194,7 @@ DECLARED = {
     # body force (section 2)
     "gravity": param(9.81, "m/s2", "gravitational acceleration g (downwards)", lo=0.0, kind=PHYSICS),
     # optional coupling terms
-    "thermomechanical_heating": param(False, "-", "the strain and pressure heating of physics.md "
+    "thermomechanical_heating": param(False, "-", "the strain and pressure heating of the theory manual "
                                       "section 6 in the rock heat equation (off: section 6 allows it)",
                                       kind=PHYSICS),
 }
@@ -235,7 +236,7 @@ class Parameters:
 
     @property
     def rho_c(self) -> float:
-        """(rho C)m = (1 - phi) rho_s C_s + phi rho_f C_f (physics.md section 6)."""
+        """(rho C)m = (1 - phi) rho_s C_s + phi rho_f C_f (theory manual, "Equations: rock heat")."""
         phi = self.rock_porosity
         return (1 - phi) * self.rock_density * self.rock_heat_capacity + phi * self.fluid_rho_c
 

@@ -1,4 +1,4 @@
-"""Wells in the rock matrix (physics.md section 9, Scene 3): a well's
+"""Wells in the rock matrix (theory manual, "Equations: wells", Scene 3): a well's
 perforated interval is a line source (injector) or sink (producer) in the
 pm equation, and the enthalpy it carries is a source or sink in the Tm
 equation.
@@ -12,13 +12,13 @@ is a point term of ``kernels/wells.py``:
 
 * injector: the rate w_k Q into pm; its vertices hold Tm = T_inj (a
   Dirichlet condition on the interval, ``Perforation.contains``: "injected
-  temperature on the injector's interval", physics.md section 9), whose
+  temperature on the injector's interval", theory manual, "Equations: wells"), whose
   reaction is the enthalpy the well brings (rho_f C_f Q T_inj carried out by
   the fluid plus what the cold well bore conducts).  The alternative, the
   enthalpy w_k rho_f C_f Q T_inj as a nodal source (the fracture wells' form,
   ``enthalpy_source``), leaves the Galerkin outflow of the well's cells with
   the mean temperature of their nodes: the well node falls far below T_inj
-  (-170 degC on a 5 m mesh; docs/scene3.md);
+  (-170 degC on a 5 m mesh; manual, Scene 3);
 * producer at a rate: w_k Q_p out of pm, carrying rho_f C_f w_k Q_p T_m,k
   out of Tm (the local matrix enthalpy, advective outflow);
 * producer at a pressure p_w: Q_k = PI_k (pm_k - p_w) with the line well's
@@ -31,7 +31,7 @@ the balance monitors sum every point term), and the produced enthalpy is
 what the Tm equation loses: the discrete mass and energy balances close to
 the solver tolerance.  Uniform distribution is the choice: a well index
 distribution would weight the nodes by the local mobility and needs a
-well-bore pressure unknown per well (a later option, docs/scene3.md).
+well-bore pressure unknown per well (a later option, manual, Scene 3).
 """
 from __future__ import annotations
 
@@ -122,7 +122,7 @@ def interval_nodes(mesh, perf: Perforation) -> list[Node]:
                          f"{len(rows)}): a matrix well's interval must be a line of the mesh "
                          "(embed it in the gmsh geometry)")
     w = lumped_weights(rows[:, 0], L)
-    return [Node(tuple(r[1:]), float(wk)) for r, wk in zip(rows, w)]
+    return [Node(tuple(r[1:]), float(wk)) for r, wk in zip(rows, w, strict=False)]
 
 
 def line_well_index(permeability: float, length: float, h: float, well_radius: float, mu: float) -> float:

@@ -1,6 +1,6 @@
 """Monitors shared by the scenes: well histories, mass and energy balances,
 the range of a temperature field against its physical bounds, and the
-running worst of any quantity (physics.md sections 7, 9 and 12).
+running worst of any quantity (theory manual, "Equations: fracture heat").
 
 Everything here is collective (``probes``) and keeps its state in its own
 attributes, so that a scene's ``Monitor`` composes them.
@@ -37,7 +37,7 @@ class Worst:
 # -- wells on a fracture ------------------------------------------------------------------
 @dataclass
 class FractureWells:
-    """An injector and/or a producer at fracture vertices (physics.md section
+    """An injector and/or a producer at fracture vertices (the theory manual
     9; kernels/wells.py).  ``share``: the part of each well in the model
     (1/2 on a symmetry plane); ``flow_dim``: 1 for a line fracture (2D), 2
     for a surface (the producer's well index)."""
@@ -85,7 +85,7 @@ class FractureWells:
 def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=None,
                       elastic=None) -> list[Conserved]:
     """Fluid volume and (with ``heat`` = (T0, rho_f C_f, (rho C)m)) energy
-    balances of physics.md section 7.  With ``elastic`` (a
+    balances of theory manual, "Equations: fracture heat".  With ``elastic`` (a
     ``poroelastic.Elastic`` coupled to pm) the matrix's fluid volume gains
     the Biot term alpha div u (section 5).
 
@@ -253,7 +253,7 @@ def _nodal_average(problem, dofs: np.ndarray, values: np.ndarray, covered: np.nd
 def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0):
     """(largest |g| over closed lam nodes on this rank, and per fracture cell
     the largest |lam_mid - (lam_a + lam_b)/2| over its edges with both ends
-    closed (nc,)), SI: the nodal contact of docs/contact.md leaves no opening
+    closed (nc,)), SI: the nodal contact of manual, verification: contact leaves no opening
     where closed and no node-to-node oscillation of lam (the second
     difference of a smooth lam is O(h^2); near a well or a prescribed front
     it is O(h) or larger).  A node is closed where lam > ``closed_traction``;
@@ -270,6 +270,13 @@ def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0)
     a, b = EDGES[r][:, 0], EDGES[r][:, 1]
     second = np.abs(lam[:, r + 1:] - 0.5 * (lam[:, a] + lam[:, b])) * (closed[:, a] & closed[:, b])
     return opening, second.max(axis=1)
+
+
+def contact_outputs(problem, t: float) -> dict[str, np.ndarray]:
+    """The contact's fields a run writes with lam (``contact_node_fields``
+    without the per-rank area weights): ``Model.outputs`` of the contact."""
+    fields = contact_node_fields(problem, t=t)
+    return {k: v for k, v in fields.items() if k not in ("weight", "slipping_area")}
 
 
 def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray]:
@@ -315,10 +322,10 @@ def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray
         out[name] = a[:, 0] if a.shape[1] == 1 else a
     weights = np.abs(surf.detJ)[:, None] * nodal_rule(surf.rdim, disc.field("lam").degree).weights[None, :]
     out["weight"] = np.bincount(idx, weights=weights.ravel(), minlength=len(order))
-    if model.aperture is not None:
-        out["aperture"] = model.aperture.law.aperture(out["lam"], out["opening"])
-    if model.friction is not None:
-        fr = model.friction
+    if model.aperture_law is not None:
+        out["aperture"] = model.aperture_law.aperture(out["lam"], out["opening"])
+    if model.friction_law is not None:
+        fr = model.friction_law
         out["slip_magnitude"] = np.linalg.norm(out["slip"], axis=1)
         bound = fr.bound(out["lam"])
         out["coulomb"] = np.linalg.norm(out["shear_traction"], axis=1) - bound

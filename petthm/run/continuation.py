@@ -1,5 +1,5 @@
 """What a restart continues (``-thm_restart DIR``; manual: "Stopping and
-continuing", physics.md section 12).
+continuing", manual, user guide).
 
 A restart continues the same problem in the folder of the run it
 continues: the checkpoint records every option in effect with its kind
@@ -22,12 +22,6 @@ from petthm import params as P
 from petthm.errors import InputError
 from petthm.io import checkpoint
 from petthm.io.output import on_root
-from petthm.solvers.timestepper import PROPOSED
-
-
-def users_options() -> dict[str, str]:
-    """The PETSc options the user gave (the database less petthm's proposals)."""
-    return {k: v for k, v in PETSc.Options().getAll().items() if k not in PROPOSED}
 
 
 def end_time(scene) -> float:
@@ -36,9 +30,10 @@ def end_time(scene) -> float:
     return opts.getReal("ts_max_time") if opts.hasName("ts_max_time") else scene.final_time
 
 
-def option_record(scene) -> dict:
-    """Every option in effect with its kind (``params.option_record``), as JSON reads it back."""
-    record = P.option_record((scene.run, scene.p), users_options())
+def option_record(scene, proposals) -> dict:
+    """Every option in effect with its kind (``params.option_record``; of the
+    PETSc options the user's, not the ``proposals``), as JSON reads it back."""
+    record = P.option_record((scene.run, scene.p), proposals.users_options())
     return json.loads(json.dumps(record, default=str))
 
 
@@ -53,8 +48,8 @@ class Continuation:
     folder exists and is the output folder, the checkpoint is readable and
     of this scene)."""
 
-    def __init__(self, scene, comm):
-        self.scene, self.comm = scene, comm
+    def __init__(self, scene, comm, proposals):
+        self.scene, self.comm, self.proposals = scene, comm, proposals
         run = scene.run
         self.folder = run.restart
         if run.output_dir and os.path.abspath(run.output_dir) != os.path.abspath(run.restart):
@@ -81,7 +76,8 @@ class Continuation:
             _say(self.comm, f"petthm: note: {self.folder}/{checkpoint.FILE} records no options (an older "
                  "petthm): the restart's options are not checked against the run it continues")
             return
-        changes = checkpoint.option_changes(json.loads(raw.decode()), option_record(self.scene))
+        now = option_record(self.scene, self.proposals)
+        changes = checkpoint.option_changes(json.loads(raw.decode()), now)
         if changes:
             raise InputError(f"option -thm_restart = {self.folder}: a restart continues the same problem, "
                              f"but {'this option differs' if len(changes) == 1 else 'these options differ'} "
@@ -128,4 +124,4 @@ class Continuation:
         return meta
 
 
-__all__ = ["Continuation", "end_time", "option_record", "users_options"]
+__all__ = ["Continuation", "end_time", "option_record"]

@@ -39,19 +39,9 @@ from petthm.mesh.plex import (
 from petthm.run.continuation import Continuation, end_time, option_record
 from petthm.run.provenance import git_commit, options_in_effect, peak_memory_mb, solver_costs
 from petthm.run.stepreport import StepReport
-from petthm.scenes.base import REGISTRY
-from petthm.solvers.recipes import solver_defaults_by_size
-from petthm.solvers.timestepper import (
-    SOLVER_DEFAULTS,
-    StepControl,
-    TimeStepper,
-    check_unused_petsc_options,
-    drop_unused_proposals,
-    error_control_defaults,
-    failure_message,
-    propose_defaults,
-    serial_plane_direct,
-)
+from petthm.scenes import MODULES, scene_class
+from petthm.solvers.options import Proposals, proposed_options
+from petthm.solvers.timestepper import StepControl, TimeStepper, failure_message
 
 
 def _say(comm, msg):
@@ -60,11 +50,9 @@ def _say(comm, msg):
 
 
 def make_scene(name: str):
-    from petthm.scenes import load
-    load(name)
-    if name not in REGISTRY:
-        raise InputError(f"unknown scene '{name}'; scenes: {', '.join(sorted(REGISTRY))}")
-    cls = REGISTRY[name]
+    cls = scene_class(name)
+    if cls is None:
+        raise InputError(f"unknown scene '{name}'; scenes: {', '.join(sorted(MODULES))}")
     run = P.read(P.RunParams)
     P.check_unknown_thm_options((P.RunParams,) + tuple(cls.parameters))
     scene = cls.read(run)
@@ -80,7 +68,8 @@ class Run:
         self.comm = PETSc.COMM_WORLD
         self.mpi = self.comm.tompi4py()
         run = scene.run
-        self.continuation = Continuation(scene, self.comm) if run.restart else None
+        self.proposals = Proposals()                  # the solver options petthm inserts (solvers.options)
+        self.continuation = Continuation(scene, self.comm, self.proposals) if run.restart else None
         self.outdir = scene.output_dir
         self.folder = RunFolder(self.outdir, self.comm)
         self._folder_open = False
@@ -146,11 +135,11 @@ class Run:
             path = os.path.join(self.outdir, "mesh.msh")
             self.claim(["mesh.msh"])
             size = run.mesh_size or scene.time.mesh_size
-            from petthm.mesh.generate import set_cell_limit
+            from petthm.mesh.generate import cell_limit
 
             def generate():
-                set_cell_limit(run.max_cells)
-                scene.generate_mesh(path, size)
+                with cell_limit(run.max_cells):
+                    scene.generate_mesh(path, size)
             self._on_rank0(generate, (InputError, OSError),
                            lambda e: str(e) if isinstance(e, InputError) else
                            f"cannot write {path}: {e.strerror or e}")
@@ -179,10 +168,8 @@ class Run:
         """The SHA-256 of the mesh file (rank 0 reads it; None if it cannot)."""
         digest = None
         if self.comm.rank == 0 and os.path.isfile(path):
-            try:
+            with contextlib.suppress(OSError):
                 digest = checkpoint.file_digest(path)
-            except OSError:
-                pass
         return self.mpi.bcast(digest, root=0)
 
     @contextlib.contextmanager
@@ -223,23 +210,6 @@ class Run:
             raise InputError(f"mesh '{self.mesh_path}' has fractures (physical groups 10, 11, ...), "
                              f"but scene {self.scene.name} has no fracture physics")
 
-    #: rock layers thinner than this fraction of the fracture's cells: the wall term over/undershoots
-    THIN_WALL_LAYER = 0.05
-
-    def _warn_thin_wall_layers(self, mesh: Mesh) -> None:
-        """-thm_fracture_supg_wall_conduction on a mesh whose rock cells next
-        to the fracture are much thinner than its cells: a one-line warning
-        (measured: Tf left [Tinj, T0] by 0.1-1.3 % at ratios 0.005-0.02 in
-        Scene 1 and by 6 % at 0.025 in Scene 2, 0 % at 0.05; docs/fracture_th.md)."""
-        if not getattr(self.scene.p, "fracture_supg_wall_conduction", False) or mesh.fracture is None:
-            return
-        ratio = mesh.fracture.thinnest_wall_layer()
-        if ratio < self.THIN_WALL_LAYER:
-            _say(self.comm, f"petthm: warning: -thm_fracture_supg_wall_conduction on rock layers "
-                 f"{ratio:.3g} times as thick as the fracture's cells (< {self.THIN_WALL_LAYER:g}): "
-                 "Tf left [Tinj, T0] by up to 6 % on meshes with such layers; check "
-                 "Tf_bounds_violation (docs/fracture_th.md)")
-
     def setup(self, mesh: Mesh):
         scene, run = self.scene, self.scene.run
         st, t0 = self._stage("setup")
@@ -247,7 +217,10 @@ class Run:
             setup = scene.build(mesh, run.fe_degree)
         model = setup.model
         self._check_fractures(mesh, model)
-        self._warn_thin_wall_layers(mesh)
+        for check in model.mesh_checks:
+            warning = check(mesh)
+            if warning:
+                _say(self.comm, f"petthm: warning: {warning}")
         regions = {Domain.FRACTURE: mesh.fracture} if mesh.fracture is not None else {}
         disc = Discretisation(mesh, model.fields, boundary_entries(setup.dirichlet), regions=regions,
                               ties=model.ties)
@@ -265,12 +238,8 @@ class Run:
         if run.dt_control == "schedule":
             control.check_reachable(end_time(scene), "thm_dt_growth" if run.dt_growth else "")
         rs = problem.auto_residual_scales(0.0, 1.0 / control.dt_initial)
-        scene_defaults = dict(SOLVER_DEFAULTS, **scene.solver_defaults(self.comm),
-                              **(error_control_defaults(control) if run.dt_control == "error" else {}))
-        scene_defaults = serial_plane_direct(scene_defaults, mesh.dim, self.comm.size, bool(model.bounds))
-        snes_type = PETSc.Options().getString("snes_type", scene_defaults["snes_type"])
-        propose_defaults(solver_defaults_by_size(scene_defaults, model.has("u"), problem.X.getSize(),
-                                                 run.direct_max_unknowns, scene.block_recipe(snes_type)))
+        self.proposals.propose(proposed_options(scene, model.has("u"), bool(model.bounds), mesh.dim,
+                                                self.comm.size, problem.X.getSize(), control, self.comm))
         self._pop("setup", st, t0)
         self.problem = problem
         self.monitor = setup.monitor
@@ -291,13 +260,13 @@ class Run:
         self._pop("output", st, t0)
         steps = StepReport(self, problem, control, scene_monitor, writers, history, resume)
         with petsc_option_errors("the solver options (-ts_*, -snes_*, -ksp_*, -pc_*)"):
-            stepper = TimeStepper(problem, control, steps)
-        steps.stepper = stepper
+            stepper = TimeStepper(problem, control, steps, self.proposals)
+        steps.stepper, steps.control = stepper, stepper.control           # the end time -ts_max_time sets
         if resume:
             stepper.resume(resume["time"], resume["dt"], resume["step"],
                            {k: resume[k] for k in stepper.schedule_state() if k in resume})
         reason, write_failure = self._solve(stepper, steps)
-        return self._finish(mesh, disc, stepper, reason, write_failure, steps, history, control)
+        return self._finish(mesh, disc, stepper, reason, write_failure, steps, history, stepper.control)
 
     def _print_start(self, mesh, disc, problem, rscales) -> None:
         sizes = disc.global_sizes()
@@ -352,7 +321,7 @@ class Run:
         return reason, failure
 
     def _status(self, stepper, reason: int, t_final: float, control) -> tuple[str, int, str | None]:
-        """(status, exit code, message) of the run (physics.md section 12)."""
+        """(status, exit code, message) of the run (manual, user guide)."""
         if stepper.stopped:
             return stepper.stop_status, 3, stepper.stopped
         if reason <= 0 or stepper.failure is not None:
@@ -365,7 +334,7 @@ class Run:
 
     def _finish(self, mesh, disc, stepper, reason, write_failure, steps, history, control) -> dict:
         scene, run, comm = self.scene, self.scene.run, self.comm
-        drop_unused_proposals()
+        self.proposals.drop_unused()
         t_final = stepper.ts.getTime()
         status, code, message = self._status(stepper, reason, t_final, control)
         if write_failure is not None:
@@ -470,23 +439,18 @@ class Run:
                 "wall": steps.wall_before + time.perf_counter() - self.t_start,
                 **({"mesh_sha256": self.mesh_digest} if self.mesh_digest else {}),
                 **stepper.schedule_state()}
-        records = {"options": json.dumps(option_record(self.scene)).encode(),
+        records = {"options": json.dumps(option_record(self.scene, self.proposals)).encode(),
                    "monitor": checkpoint.pack_state(self.monitor.carried_state())}
         checkpoint.write(self.outdir, self.problem.X, self.problem.dm, meta, records)
 
-    @staticmethod
-    def check_unused_options() -> None:
-        check_unused_petsc_options()
+    def check_unused_options(self) -> None:
+        self.proposals.check_unused()
 
-    @staticmethod
-    def _si_out(problem, name, t):
-        v = problem.field_values(name, t=t)
-        return v - P.CELSIUS if name.startswith("T") else v
 
 
 def run_scene(name: str) -> dict:
     """Run a scene from the options database; the summary (its ``exit_code``:
-    physics.md section 12).  A run refused for its input removes the files
+    manual, user guide).  A run refused for its input removes the files
     it wrote itself, so that the corrected command can start in the same folder."""
     run = Run(make_scene(name))
     try:

@@ -1,4 +1,4 @@
-"""What summary.json records besides the results (physics.md section 12):
+"""What summary.json records besides the results (manual, user guide):
 the solver's event counts and times, the peak memory, the git commit of
 the source and the options in effect."""
 from __future__ import annotations

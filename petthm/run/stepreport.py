@@ -7,7 +7,7 @@ from __future__ import annotations
 import time
 
 from petthm.io import checkpoint
-from petthm.physics.monitors import contact_node_fields, hit
+from petthm.physics.monitors import hit
 
 
 def _say(comm, msg):
@@ -41,10 +41,11 @@ class StepReport:
         run, problem = self.run, self.problem
         s, t1 = run._stage("output")
         for w, fields in self.writers:
-            out = {f.name: run._si_out(problem, f.name, t) for f in fields}
-            if any(f.name == "lam" for f in fields):          # opening, aperture, slip, ...
-                out.update({k: v for k, v in contact_node_fields(problem, t=t).items()
-                            if k not in ("weight", "slipping_area")})
+            out = {f.name: f.output(problem.field_values(f.name, t=t)) for f in fields}
+            names = {f.name for f in fields}
+            for extra in problem.model.outputs:                   # e.g. the contact's opening, aperture, slip
+                if extra.like in names:
+                    out.update(extra.fields(problem, t))
             w.write(t, out)
         run._pop("output", s, t1)
 

@@ -13,8 +13,8 @@ state (errors so far, last values) lives in that monitor, not in the scene.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -22,6 +22,7 @@ from petthm import params as P
 from petthm.discretisation.assembly import FieldScale
 from petthm.discretisation.constraints import Dirichlet
 from petthm.discretisation.model import Model
+from petthm.discretisation.problem import OnSides
 from petthm.errors import InputError
 from petthm.mesh.fracture import TIP_BC
 from petthm.physics.materials import Parameters
@@ -136,11 +137,10 @@ def constant_in_time(value: float) -> Callable:
     return lambda x, t: np.full(len(x), value)
 
 
-def on_sides(f: Callable) -> Callable:
+def on_sides(f: Callable) -> OnSides:
     """An initial state f(x, inside) of a field that jumps across a fracture:
     ``inside`` is a point of a cell next to each node (``Problem.set_initial``)."""
-    f.sided = True
-    return f
+    return OnSides(f)
 
 
 def zero(x, t):
@@ -161,7 +161,8 @@ class Scene:
     history_columns: tuple = ()
     dimension: int | None = None       # the space dimension of a scene without a -thm_*_dim option
 
-    #: pressures are gauge (absolute = p + 101 325 Pa); False: absolute (physics.md section 8)
+    #: pressures are gauge (absolute = p + 101 325 Pa); False: absolute (theory manual, "Equations:
+    #: fluid properties")
     gauge_pressure: bool = True
     #: the pressure (Pa; gauge or absolute as above) of the water of a scene without a pressure option
     water_pressure: float | None = None
@@ -171,7 +172,7 @@ class Scene:
         self.p = p
 
     @classmethod
-    def read(cls, run: P.RunParams) -> "Scene":
+    def read(cls, run: P.RunParams) -> Scene:
         """The scene with its parameters read from the options database."""
         return cls(run, P.read_all(cls.parameters, base=Parameters))
 
@@ -288,9 +289,3 @@ class Scene:
         return min(self.hit_times(), default=self.final_time)
 
 
-REGISTRY: dict[str, type] = {}
-
-
-def register(cls):
-    REGISTRY[cls.name] = cls
-    return cls

@@ -1,4 +1,4 @@
-"""Fracture mechanics scenes (physics.md sections 2-3, verification.md
+"""Fracture mechanics scenes (theory manual, "Equations: rock deformation", the manual's verification
 sections 4-5): elastic rock with fracture faces loaded by the fluid pressure
 and the contact traction ``lam``.
 
@@ -42,7 +42,6 @@ from petthm.scenes.base import (
     TimeDefaults,
     constant,
     constant_in_time,
-    register,
     tip_tractions,
     zero,
 )
@@ -77,7 +76,7 @@ def contact_solver_defaults(comm) -> dict:
     """A direct solve with the VI Newton; snes_atol 1e-12: one more Newton
     step (an iterative refinement) where the LU is less accurate than MUMPS
     (PETSc's own LU with reordering)."""
-    from petthm.solvers.timestepper import direct_solver_defaults
+    from petthm.solvers.options import direct_solver_defaults
     return dict(direct_solver_defaults(comm), snes_type=VI_NEWTON, snes_atol="1e-12")
 
 
@@ -86,13 +85,13 @@ def contact_block_recipe() -> dict:
     Newton to a scaled residual of 1e-9, not ``contact_solver_defaults``'
     1e-12 (an iterative refinement of PETSc's own LU, which the block path,
     solving each Newton step to ``-ksp_rtol 1e-6``, does not have).
-    Measured on Scenes 2 and 3 (docs/solvers.md): a third of the Newton
+    Measured on Scenes 2 and 3 (manual, solver guide): a third of the Newton
     iterations go, the reported quantities move by <= 2e-9 of their values.
     A linear solve stops at a tenth of that (``ksp_atol`` 1e-10): below it
     Newton's next residual is its own nonlinear remainder (Scene 2 default,
     five long steps: the second Newton iteration's solve takes 3 Krylov
     iterations, not 7, with the same residuals to the printed digits;
-    docs/solvers.md, stop 39)."""
+    manual, solver guide)."""
     return {"snes_atol": "1e-9", "ksp_atol": "1e-10"}
 
 
@@ -108,7 +107,7 @@ def mechanics_model(p, mesh, degree, pressure, normal_stress: float, u_scale: fl
 # -- sneddon ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class SneddonParams:
-    """Pressurised crack in an infinite solid (sneddon; verification.md section 4)"""
+    """Pressurised crack in an infinite solid (sneddon; manual, verification)"""
     sneddon_dim: int = param(3, "-", "3: penny crack (quarter model), 2: Griffith crack (half model)",
                              choices=(2, 3), kind=MESH)
     sneddon_radius: float = param(100.0, "m", "crack radius R (3D) or half-length c (2D)", lo=0.0,
@@ -156,7 +155,6 @@ class _SneddonMonitor(Monitor):
                 "opening_centre_exact": self.scene.centre_opening()}
 
 
-@register
 class Sneddon(Scene):
     name = "sneddon"
     description = "pressurised penny (3D) or Griffith (2D) crack: opening against Sneddon's solution"
@@ -201,7 +199,7 @@ class Sneddon(Scene):
         return self.p.initial_pressure - self.normal_stress()
 
     def exact_opening(self, r):
-        """Sneddon's total opening w(r) (verification.md section 4)."""
+        """Sneddon's total opening w(r) (manual, verification)."""
         p = self.p
         E, nu, R, pn = p.rock_youngs_modulus, p.rock_poisson_ratio, p.sneddon_radius, self.net_pressure()
         s = np.sqrt(np.clip(1 - (r / R) ** 2, 0.0, None))
@@ -241,7 +239,7 @@ class Sneddon(Scene):
 # -- contact_patch -----------------------------------------------------------------------
 @dataclass(frozen=True)
 class ContactPatchParams:
-    """Closed fracture across the domain under compression (contact_patch; verification.md section 5)"""
+    """Closed fracture across the domain under compression (contact_patch; manual, verification)"""
     contact_dim: int = param(3, "-", "space dimension", choices=(2, 3), kind=MESH)
     contact_size: float = param(10.0, "m", "domain width and height", lo=0.0, lo_open=True, kind=MESH)
     contact_insitu_fraction: float = param(0.5, "-", "fraction of sigma and p present at t = 0; the rest "
@@ -280,7 +278,6 @@ class _ContactPatchMonitor(Monitor):
                 "lam_exact": self.scene.exact_lam(t)}
 
 
-@register
 class ContactPatch(Scene):
     name = "contact_patch"
     description = "closed fracture under compression and fluid pressure: lam = sigma - p, zero opening"
@@ -297,7 +294,7 @@ class ContactPatch(Scene):
         W, d = p.contact_size, p.contact_dim
         out = {"bottom": lambda x: np.isclose(x[:, -1], 0.0), "top": lambda x: np.isclose(x[:, -1], W)}
         for k in range(d - 1):
-            out[f"side{k}"] = (lambda k: lambda x: np.isclose(x[:, k], 0.0) | np.isclose(x[:, k], W))(k)
+            out[f"side{k}"] = lambda x, k=k: np.isclose(x[:, k], 0.0) | np.isclose(x[:, k], W)
         return out
 
     def generate_mesh(self, path, size):

@@ -1,4 +1,4 @@
-"""The full coupled manufactured solution (verification.md section 8):
+"""The full coupled manufactured solution (manual, verification):
 every field of Scene 3 at once (u, pm, Tm, pf, Tf, and lam), made with the
 same builders as ``inclined_penny`` (Biot with thermal strain, the contact
 face loads, the deformable aperture, the cubic law with da/dt, leakoff by
@@ -32,7 +32,7 @@ from petthm.params import DISCRETISATION, MESH, PHYSICS, param
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import poroelastic as pe
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, face, on_sides, register
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, face, on_sides
 from petthm.scenes.contact import contact_block_recipe, contact_solver_defaults
 from petthm.solvers.recipes import flow_heat_first_recipe
 from petthm.verification.manufactured import HALVES, Amplitudes, Coefficients, CoupledSolution
@@ -43,7 +43,7 @@ FRACTURE_FIELDS = ("pf", "Tf")
 
 @dataclass(frozen=True)
 class CoupledMMSParams:
-    """The full coupled manufactured solution (coupled_mms; verification.md section 8)"""
+    """The full coupled manufactured solution (coupled_mms; manual, verification)"""
     coupled_mms_dim: int = param(2, "-", "space dimension", choices=(2, 3), kind=MESH)
     coupled_mms_state: str = param("open", "-", "the fracture: open (lam = 0, a = a0 + opening) or closed "
                                    "(u continuous, lam > 0, a = a0 - lam/Kn)", choices=("open", "closed"),
@@ -100,7 +100,6 @@ class _ErrorNorms(Monitor):
                 "state": self.scene.p.coupled_mms_state}
 
 
-@register
 class CoupledMMS(Scene):
     name = "coupled_mms"
     description = ("manufactured solution of every coupled field (u, pm, Tm, pf, Tf, lam) with a "
@@ -151,10 +150,10 @@ class CoupledMMS(Scene):
         """Scene 3's recipe, which has the same fields (``recipes.flow_heat_first_recipe``
         and ``contact_block_recipe``).  ``BLOCK_RECIPE``'s five splits stop
         at 500 Krylov iterations in every linear solve of the first step
-        (3D P1, mesh size 0.04, 60 207 unknowns, open and closed; stop 44).
+        (3D P1, mesh size 0.04, 60 207 unknowns, open and closed).
         With this recipe both states complete, with the direct solve's
         steps and its errors against the exact solution to six digits
-        (docs/coupled_mms.md)."""
+        (manual, verification: coupled MMS)."""
         return {**contact_block_recipe(), **flow_heat_first_recipe(self.run.fe_degree)}
 
     def solution(self, dim: int) -> CoupledSolution:

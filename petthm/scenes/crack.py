@@ -1,5 +1,5 @@
-"""Crack scenes of the fracture mechanics (physics.md sections 2-3,
-verification.md section 5): a buried crack in elastic rock, half model in
+"""Crack scenes of the fracture mechanics (theory manual, "Equations: rock deformation",
+manual, verification): a buried crack in elastic rock, half model in
 plane strain, its faces loaded by the fluid pressure and the contact
 traction ``lam`` (the shared pieces are in ``contact.py``).
 
@@ -23,7 +23,7 @@ from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import contact as ct
 from petthm.physics.monitors import fracture_vertices
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions, zero
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, tip_tractions, zero
 from petthm.scenes.contact import (
     OPEN_TRACTION,
     contact_solver_defaults,
@@ -117,7 +117,6 @@ class _CrackScene(Scene):
         return glued(SSLS_CRACK_GAMG) if snes_type == "vinewtonssls" else {}
 
 
-@register
 class PartialOpening(_CrackScene):
     name = "partial_opening"
     dimension = 2
@@ -189,7 +188,6 @@ class _InflationMonitor(_ProfileMonitor):
         return dict(self.last, error={"volume_balance": self.last.get("volume_balance")})
 
 
-@register
 class FractureInflation(_CrackScene):
     name = "fracture_inflation"
     dimension = 2

@@ -1,5 +1,5 @@
-"""Fracture flow scenes with a rigid rock (physics.md sections 4-5,
-verification.md section 3).
+"""Fracture flow scenes with a rigid rock (theory manual, "Equations: fracture flow",
+manual, verification).
 
 * ``fracture_flow_patch``: steady cubic-law flow along a fracture cutting
   the domain, pressure fixed at both ends: linear, exact for P1 and P2.
@@ -25,7 +25,7 @@ from petthm.params import MESH, PHYSICS, param
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.monitors import FractureWells, Worst, hit
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time
 from petthm.scenes.fractured import (
     balances_of,
     far_sides,
@@ -33,7 +33,7 @@ from petthm.scenes.fractured import (
     rigid_fracture_physics,
     strip_with_fracture,
 )
-from petthm.solvers.timestepper import direct_solver_defaults
+from petthm.solvers.options import direct_solver_defaults
 
 
 # -- fracture_flow_patch ------------------------------------------------------------------
@@ -79,7 +79,6 @@ class _PatchMonitor(Monitor):
         return {"error": {"pf_max_rel": pe, "flux_rel": fe}, "balance_max": self.worst.as_dict()}
 
 
-@register
 class FractureFlowPatch(Scene):
     name = "fracture_flow_patch"
     description = "steady cubic-law flow along a fracture: linear pressure, exact for P1 and P2"
@@ -138,7 +137,7 @@ class _RadialMonitor(Monitor):
 
     def error(self, problem, t, X=None):
         """Max |p - p_exact| over fracture nodes at r >= 5 h_well, relative to
-        the largest pressure rise p_exact - p_R among them (verification.md 3b);
+        the largest pressure rise p_exact - p_R among them (manual, verification);
         with no rise (Q = 0, a shut-in: p_exact = p_R) relative to the
         pressure scale instead."""
         p, sc = self.scene.p, self.scene
@@ -162,11 +161,10 @@ class _RadialMonitor(Monitor):
         return {"error": {"pf_rel_beyond_5h": self.error(problem, t)}, "balance_max": self.worst.as_dict()}
 
 
-@register
 class RadialFlow(Scene):
     name = "radial_flow"
     dimension = 3
-    description = "point injector in a disc fracture: p = p_R + Q/(2 pi T_h) ln(R/r) (verification.md 3b)"
+    description = "point injector in a disc fracture: p = p_R + Q/(2 pi T_h) ln(R/r) (manual, verification)"
     parameters = (mt.group("Fluid", ("fluid_viscosity", "fluid_compressibility"), fluid_compressibility=0.0),
                   mt.group("Fracture", ("fracture_aperture",), fracture_aperture=2e-4),
                   mt.group("Well", ("injection_rate",), injection_rate=1e-3),
@@ -267,7 +265,6 @@ class _LeakoffMonitor(Monitor):
                 "balance_max": self.worst.as_dict()}
 
 
-@register
 class Leakoff1D(Scene):
     name = "leakoff_1d"
     dimension = 2

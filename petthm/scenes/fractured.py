@@ -1,5 +1,5 @@
 """What the fracture flow and heat scenes share: the rigid-fracture physics
-(physics.md sections 4-7), the strip geometry, a monitor of wells,
+(theory manual, "Equations: fracture flow"), the strip geometry, a monitor of wells,
 balances and the fracture temperature's bounds, and the closed initial
 state of a deformable fracture under the in-situ stress (Scenes 2 and 3).
 
@@ -7,7 +7,7 @@ Fracture fields ``pf``, ``Tf`` live on the - faces of the cohesive cells;
 the matrix fields ``pm``, ``Tm`` on the split mesh.  The interface
 conditions pm = pf and (``equilibrium`` exchange) Tm = Tf on both faces are
 imposed by tying the matrix nodes on the walls to the fracture unknowns
-(docs/fracture.md).
+(manual, verification: fracture flow and heat).
 """
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from petthm.physics.monitors import Balances, FractureWells, TemperatureRange, W
 from petthm.scenes.base import Monitor
 
 #: ``auto`` first rock layer of a layered mesh: this fraction of the rock's
-#: diffusion length sqrt(kappa t) at the scene's first output time (issue 16 item 2)
+#: diffusion length sqrt(kappa t) at the scene's first output time
 AUTO_LAYER_FRACTION = 0.5
 
 
@@ -45,7 +45,7 @@ class FirstLayer:
     def resolve(self, diffusivity: float, t_first: float) -> float:
         """The thickness in m: as given, or ``AUTO_LAYER_FRACTION``
         sqrt(kappa t_first), kappa the rock's thermal diffusivity
-        lambda/(rho c) (physics.md section 7): the conduction layer's depth
+        lambda/(rho c) (theory manual, "Equations: fracture heat"): the conduction layer's depth
         at the first time the scene reports."""
         if self.thickness is not None:
             return self.thickness
@@ -112,7 +112,7 @@ def rigid_fracture_physics(b: ModelBuilder, degree: int, *, heat: bool, permeabi
 
 class ClosedUnderStress:
     """A deformable fracture that starts closed under the in-situ stress
-    (physics.md sections 3, 11): the scene's ``normal()`` gives the
+    (theory manual, "Contact and friction"): the scene's ``normal()`` gives the
     fracture's unit normal; lam0 = sigma_n - p0 and a = ac(lam0)."""
 
     def normal(self) -> np.ndarray:

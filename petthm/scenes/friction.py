@@ -1,4 +1,4 @@
-"""Frictional contact scenes (physics.md section 3; kernels/friction.py).
+"""Frictional contact scenes (theory manual, "Contact and friction"; kernels/friction.py).
 
 * ``friction_patch``: a fracture cutting the whole domain (normal to the
   last axis, at mid-height) under its in-situ normal stress sigma, sheared
@@ -41,7 +41,7 @@ from petthm.physics import materials as mt
 from petthm.physics.kernels import poroelastic as pe
 from petthm.physics.kernels.friction import tangent_basis
 from petthm.physics.monitors import contact_node_fields
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, register, tip_tractions
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, tip_tractions
 from petthm.scenes.contact import contact_solver_defaults, fracture_normal, mechanics_model
 
 
@@ -116,7 +116,6 @@ class _FrictionPatchMonitor(Monitor):
                 "slip_exact_final": self.scene.exact(t)[1]}
 
 
-@register
 class FrictionPatch(_CoulombScene):
     name = "friction_patch"
     description = "sheared fracture across the domain: stick below mu_f sigma, then uniform slip"
@@ -259,7 +258,6 @@ class _InclinedCrackMonitor(Monitor):
                     error={k: self.last.get(k) for k in ("slip_l2_error", "lam_error", "law_error")})
 
 
-@register
 class InclinedCrack(_CoulombScene):
     name = "inclined_crack"
     description = "frictional crack inclined in uniaxial compression: slip against the mode II profile"

@@ -1,4 +1,4 @@
-"""Heat-transport verification scenes (physics.md section 6; verification.md 7a, 8),
+"""Heat-transport verification scenes (theory manual, "Equations: rock heat"; manual, verification, 8),
 all on the production path of the rock heat equation (kernels/heat.Heat,
 conservative form with SUPG).
 
@@ -30,8 +30,8 @@ from petthm.params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import heat as hk
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, face, register
-from petthm.solvers.timestepper import direct_solver_defaults
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, face
+from petthm.solvers.options import direct_solver_defaults
 
 FIELD = "Tm"
 ROCK_AND_FLUID_HEAT = mt.ROCK_HEAT + ("rock_porosity",) + mt.FLUID_HEAT
@@ -65,7 +65,6 @@ class _ErrorNorms(Monitor):
                 "h_max": probes.global_max(mesh.dm.comm, mesh.h, empty=0.0)}
 
 
-@register
 class HeatMMS(Scene):
     name = "heat_mms"
     description = "manufactured solution for transient advection-diffusion (2D/3D, P1/P2)"
@@ -184,11 +183,10 @@ class _ErfcMonitor(Monitor):
         return {"error": {"Tm_max_rel": self.error(problem, t)}}
 
 
-@register
 class HeatErfc(Scene):
     name = "heat_erfc"
     dimension = 2
-    description = "1D transient conduction into a half-space (verification.md 7a), graded mesh"
+    description = "1D transient conduction into a half-space (manual, verification), graded mesh"
     water_pressure = 1e6                # Pa gauge (no pressure field; liquid up to 184 degC)
     parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT),
                   mt.group("Initial and surface temperature", ("initial_temperature", "surface_temperature")),
@@ -263,7 +261,6 @@ class _ExtremesMonitor(Monitor):
                 "cell_peclet_min": self.scene.cell_peclet(problem.disc.mesh)}
 
 
-@register
 class HeatAdvection(Scene):
     name = "heat_advection"
     dimension = 2
@@ -278,7 +275,7 @@ class HeatAdvection(Scene):
     history_columns = ("T_min", "T_max", "overshoot", "cell_peclet")
     # an advection-dominated, nonsymmetric system: algebraic multigrid (the
     # default) needed up to 2000 Krylov iterations per solve; a direct solve
-    # of this 2D case takes one (docs/heat.md)
+    # of this 2D case takes one (manual, verification: heat)
     solver_defaults = staticmethod(direct_solver_defaults)
 
     def boundaries(self):

@@ -1,6 +1,6 @@
 """``lauwerier``: cold water through a fracture in impermeable hot rock,
-compared with Lauwerier's solution (physics.md sections 4, 7 and 9;
-verification.md section 1): 2D (plane strain, H = 1 m, point wells) or a 3D
+compared with Lauwerier's solution (theory manual, "Equations: fracture flow";
+manual, verification): 2D (plane strain, H = 1 m, point wells) or a 3D
 slab of height H with line wells.
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import wells as wl
 from petthm.physics.monitors import FractureWells, hit
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time
 from petthm.scenes.fractured import (
     SCENE1_WELLS,
     FirstLayer,
@@ -33,13 +33,13 @@ from petthm.scenes.fractured import (
     strip_with_fracture,
     transmissivity,
 )
-from petthm.solvers.timestepper import direct_solver_defaults
+from petthm.solvers.options import direct_solver_defaults
 from petthm.verification.analytic import lauwerier_temperature
 
 
 @dataclass(frozen=True)
 class LauwerierParams:
-    """Fracture in impermeable hot rock (lauwerier; verification.md section 1)"""
+    """Fracture in impermeable hot rock (lauwerier; manual, verification)"""
     lauwerier_length: float = param(100.0, "m", "fracture length L (injector at x = 0, producer at x = L)",
                                     lo=0.0, lo_open=True, kind=MESH)
     lauwerier_width: float = param(0.0, "m", "rock on each side of the fracture (0: the larger of 60 m "
@@ -61,7 +61,7 @@ class LauwerierParams:
                                            choices=("full", "normal"), kind=PHYSICS)
 
 
-#: the rock of Scene 1 (physics.md section 11)
+#: the rock of Scene 1 (manual, "The paper's scenes")
 SCENE1_ROCK = dict(rock_density=2820.0, rock_heat_capacity=1170.0, rock_conductivity=2.88)
 
 
@@ -109,10 +109,10 @@ class SlabWells:
         H = p.lauwerier_height
         self.terms = [wl.injector(tuple(x), p.injection_rate * c / H, p.fluid_rho_c, p.T_inj,
                                   name=f"injector_{i}")
-                      for i, (x, c) in enumerate(zip(Xi, wi))]
+                      for i, (x, c) in enumerate(zip(Xi, wi, strict=False))]
         self.terms += [wl.producer(tuple(x), p.production_pressure, PI_line * c, p.fluid_rho_c,
                                    name=f"producer_{i}")
-                       for i, (x, c) in enumerate(zip(Xp, wp))]
+                       for i, (x, c) in enumerate(zip(Xp, wp, strict=False))]
         self.lines = (Xi, wi, Xp, wp)
         return self.terms
 
@@ -122,7 +122,7 @@ class SlabWells:
         Xi, wi, Xp, wp = self.lines
         pin = [probes.point_value(problem, "pf", x, X, t) for x in Xi]
         qs, Ts = [], []
-        for term, x in zip([w for w in self.terms if w.name.startswith("producer")], Xp):
+        for term, x in zip([w for w in self.terms if w.name.startswith("producer")], Xp, strict=False):
             v = {"pf": probes.point_value(problem, "pf", x, X, t),
                  "Tf": probes.point_value(problem, "Tf", x, X, t)}
             qs.append(term.residual(v, t)["pf"])
@@ -184,7 +184,6 @@ class _LauwerierMonitor(Monitor):
                 "heat_exchange": str(self.scene.p.fracture_heat_exchange)}
 
 
-@register
 class Lauwerier(Scene):
     name = "lauwerier"
     description = "cold water through a fracture in impermeable rock vs Lauwerier (2D, H = 1 m)"

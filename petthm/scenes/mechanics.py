@@ -1,5 +1,5 @@
-"""Elastic and thermo-elastic verification scenes (physics.md sections 2 and
-6; verification.md section 7b).
+"""Elastic and thermo-elastic verification scenes (theory manual, "Equations: rock deformation" and
+6; manual, verification).
 
 * ``gravity_column``: an elastic column under its own weight (body force):
   quadratic settlement, exact for P2.
@@ -23,8 +23,8 @@ from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import poroelastic as pe
 from petthm.physics.monitors import hit
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register, zero
-from petthm.solvers.timestepper import direct_solver_defaults
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, zero
+from petthm.solvers.options import direct_solver_defaults
 
 
 # ---------------------------------------------------------------------------------
@@ -53,7 +53,6 @@ class _GravityMonitor(Monitor):
         return {"error": {"u_max_rel": self.last["u_max_error"]}}
 
 
-@register
 class GravityColumn(Scene):
     """-div sigma = F with F = (0, -rho g): bottom fixed, sides on rollers,
     top free.  u_y = -rho g / (lambda + 2G) (H y - y^2/2) is quadratic, so P2
@@ -94,7 +93,7 @@ class GravityColumn(Scene):
 # ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class ThermalStressParams:
-    """Cooling of a laterally constrained half-space (thermal_stress; verification.md 7b)"""
+    """Cooling of a laterally constrained half-space (thermal_stress; manual, verification)"""
     thermal_depth: float = param(60.0, "m", "depth of the column (> 4 sqrt(kappa t_final))", lo=0.0,
                                  lo_open=True, kind=MESH)
     thermal_width: float = param(1.0, "m", "width of the column", lo=0.0, lo_open=True, kind=MESH)
@@ -141,11 +140,10 @@ class _ThermalStressMonitor(Monitor):
         return {"error": err}
 
 
-@register
 class ThermalStress(Scene):
     name = "thermal_stress"
     dimension = 2
-    description = ("1D cooling with constrained lateral strain (verification.md 7b): T, lateral stress, "
+    description = ("1D cooling with constrained lateral strain (manual, verification): T, lateral stress, "
                    "surface motion")
     parameters = (mt.group("Rock", mt.ELASTIC + mt.ROCK_HEAT + ("rock_thermal_expansion",)),
                   mt.group("Temperatures", ("initial_temperature", "surface_temperature")),

@@ -1,5 +1,5 @@
-"""Poroelastic verification scenes (physics.md sections 2 and 5;
-verification.md section 6).
+"""Poroelastic verification scenes (theory manual, "Equations: rock deformation";
+manual, verification).
 
 * ``terzaghi``: 1D consolidation of a column (plane strain, lateral and base
   rollers, a load sigma0 on the drained top at t = 0+, impermeable base),
@@ -23,12 +23,12 @@ from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import poroelastic as pe
 from petthm.physics.monitors import hit
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, register, zero
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, zero
+from petthm.solvers.options import direct_solver_defaults
 from petthm.solvers.recipes import PMG_P1_NOT_AGGRESSIVE, glued
-from petthm.solvers.timestepper import direct_solver_defaults
 from petthm.verification.analytic import series_sum
 
-#: the poroelastic rock and fluid (verification.md rock set R)
+#: the poroelastic rock and fluid (the manual's verification rock set R)
 POROUS_ROCK = mt.group("Poroelastic rock and fluid", mt.ELASTIC + (
     "rock_biot_coefficient", "rock_porosity", "rock_permeability", "fluid_compressibility",
     "fluid_viscosity"),
@@ -128,10 +128,9 @@ class _TerzaghiMonitor(Monitor):
                 "p_overshoot_max_rel_load": self.overshoot}
 
 
-@register
 class Terzaghi(Scene):
     name = "terzaghi"
-    description = "1D consolidation (verification.md 6a): pressure and settlement vs the series solution"
+    description = "1D consolidation (manual, verification): pressure and settlement vs the series solution"
     parameters = (POROUS_ROCK, TerzaghiParams)
     time = TimeDefaults(final_time=1300.0, dt_initial=0.0648, dt_growth=1.05, dt_max=2.0, mesh_size=0.5)
     history_columns = ("settlement", "settlement_exact", "p_base", "p_base_exact", "p_l2_rel", "p_overshoot")
@@ -142,7 +141,7 @@ class Terzaghi(Scene):
         (``recipes.PMG_P1_NOT_AGGRESSIVE``): item 9's weak scaling 1.11x
         against 1.41x over 1-8 ranks; to 2 t_c on three levels 8.6 / 8.8 /
         9.6 against 10.1 / 11.1 / 12.4 Krylov iterations per Newton
-        iteration (docs/solvers.md, stop 43).  P1 u has no p-multigrid, so
+        iteration (manual, solver guide).  P1 u has no p-multigrid, so
         nothing is proposed there."""
         return glued(PMG_P1_NOT_AGGRESSIVE) if self.run.fe_degree == 2 else {}
 
@@ -232,7 +231,7 @@ class Terzaghi(Scene):
 # ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class MandelParams:
-    """Mandel's problem, quarter domain (mandel; verification.md 6b)"""
+    """Mandel's problem, quarter domain (mandel; manual, verification)"""
     mandel_a: float = param(10.0, "m", "half-width a (drained sides at x = +-a)", lo=0.0, lo_open=True,
                             kind=MESH)
     mandel_b: float = param(10.0, "m", "half-height b (rigid plates at y = +-b)", lo=0.0, lo_open=True,
@@ -286,11 +285,10 @@ class _MandelMonitor(Monitor):
                 "peak_time_tau": self.peak[1] / sc.t_ref(), "p0": sc.p0()}
 
 
-@register
 class Mandel(Scene):
     name = "mandel"
     dimension = 2
-    description = "Mandel's problem (verification.md 6b): pressure incl. the Mandel-Cryer overshoot"
+    description = "Mandel's problem (manual, verification): pressure incl. the Mandel-Cryer overshoot"
     parameters = (POROUS_ROCK, MandelParams)
     time = TimeDefaults(final_time=700.0, dt_initial=0.0648, dt_growth=1.05, dt_max=1.3, mesh_size=0.5)
     history_columns = ("p_centre", "p_centre_exact", "p_max_error", "plate_force_rel_error")

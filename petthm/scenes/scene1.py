@@ -1,10 +1,10 @@
-"""Fracture heat transport with leakoff into a permeable matrix (physics.md
-sections 4-7 and 11; verification.md section 2).
+"""Fracture heat transport with leakoff into a permeable matrix (the theory manual
+sections 4-7 and 11; manual, verification).
 
 * ``rigid_fracture``: Scene 1 of the paper: cold water through a rigid
   fracture with leakoff into a permeable matrix (1D or isotropic leakoff).
 * ``leakoff_heat``: a uniform leakoff fraction m, outlet temperature against
-  the Laplace-domain solution of verification.md section 2.
+  the Laplace-domain solution of manual, verification.
 """
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import wells as wl
 from petthm.physics.monitors import Balances, FractureWells, Worst, hit
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, register
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time
 from petthm.scenes.fractured import (
     SCENE1_WELLS,
     FirstLayer,
@@ -41,7 +41,7 @@ from petthm.scenes.fractured import (
     transmissivity,
 )
 from petthm.scenes.lauwerier import SCENE1_ROCK
-from petthm.solvers.timestepper import direct_solver_defaults
+from petthm.solvers.options import direct_solver_defaults
 
 FRACTURE_HEAT = mt.group("Fracture", ("fracture_aperture",) + mt.FRACTURE_HEAT)
 
@@ -101,7 +101,6 @@ class _Scene1Monitor(Monitor):
         return out
 
 
-@register
 class RigidFracture(Scene):
     name = "rigid_fracture"
     dimension = 2
@@ -173,10 +172,10 @@ class RigidFracture(Scene):
     solver_defaults = staticmethod(direct_solver_defaults)
 
 
-# -- leakoff_heat (verification.md section 2) -------------------------------------------------------
+# -- leakoff_heat (manual, verification) -------------------------------------------------------
 @dataclass(frozen=True)
 class LeakoffHeatParams:
-    """Fracture heat transport with a uniform leakoff fraction m (leakoff_heat; verification.md 2)"""
+    """Fracture heat transport with a uniform leakoff fraction m (leakoff_heat; manual, verification)"""
     leakoff_fraction: float = param(0.25, "-", "fraction m of the injected rate lost over the fracture",
                                     lo=0.0, hi=1.0, lo_open=True, kind=PHYSICS)
     leakoff_heat_length: float = param(100.0, "m", "fracture length L", lo=0.0, lo_open=True, kind=MESH)
@@ -216,12 +215,11 @@ class _LeakoffHeatMonitor(Monitor):
         return {"error": err, "balance_max": self.worst.as_dict()}
 
 
-@register
 class LeakoffHeat(Scene):
     name = "leakoff_heat"
     dimension = 2
     description = ("uniform leakoff fraction m: outlet temperature vs the Laplace-domain solution "
-                   "(verification.md 2)")
+                   "(manual, verification)")
     parameters = (mt.group("Fluid", mt.FLUID_FLOW + mt.FLUID_HEAT, fluid_compressibility=0.0,
                            fluid_thermal_expansion=0.0),
                   mt.group("Rock", mt.ROCK_HEAT + ("rock_porosity", "rock_permeability"), **SCENE1_ROCK),

@@ -1,4 +1,4 @@
-"""Scene 3 of the paper (physics.md section 11): a deformable inclined
+"""Scene 3 of the paper (manual, "The paper's scenes"): a deformable inclined
 fracture in a permeable, thermo-poro-elastic rock with matrix wells.
 
 * ``inclined_penny``: a disc fracture (R = 200 m) dipping 30 degrees,
@@ -14,7 +14,7 @@ fracture in a permeable, thermo-poro-elastic rock with matrix wells.
   the defaults of T0 and the in-situ stress (the paper's three cases).
 
 The box [-L, L]^3 (L = ``-thm_scene3_box`` R) has rollers on its faces
-and the initial pressure and temperature there.  docs/scene3.md gives the
+and the initial pressure and temperature there.  manual, Scene 3 gives the
 reasons for what the paper leaves open.
 """
 from __future__ import annotations
@@ -45,7 +45,6 @@ from petthm.scenes.base import (
     TimeDefaults,
     constant,
     constant_in_time,
-    register,
     tip_tractions,
 )
 from petthm.scenes.contact import OPEN_TRACTION, contact_block_recipe, contact_solver_defaults
@@ -134,7 +133,7 @@ class _Scene3Monitor(Monitor):
         where = probes.mpi(comm).bcast(where, root=int(owner))
         out["aperture_increase_max"] = best
         out["aperture_increase_ratio"] = best / a0
-        out.update({f"aperture_increase_{c}": float(v) for c, v in zip("xyz", where)})
+        out.update({f"aperture_increase_{c}": float(v) for c, v in zip("xyz", where, strict=False)})
         out["raised_area"] = probes.global_sum(comm, float(np.sum(f["weight"][rise > RAISED * a0])))
         closed = lam > OPEN_TRACTION * sc.lam0
         ident = np.abs(a - self.law.closure_aperture(lam)[0])[closed]
@@ -143,7 +142,7 @@ class _Scene3Monitor(Monitor):
         out["nodes_open"] = probes.global_count(comm, ~closed & self.owned(problem))
         opening, _ = contact_node_checks(problem, OPEN_TRACTION * sc.lam0, X, t)
         out["closed_opening"] = probes.global_max(comm, [opening]) / a0
-        out.update(slip_columns(problem, fields=f) if problem.model.friction is not None else
+        out.update(slip_columns(problem, fields=f) if problem.model.friction_law is not None else
                    {"slip_max": np.nan, "slipping_area": np.nan})
         out.update(self.tf(problem, t, X))
         out.update(self.balances(problem, t, X))
@@ -180,7 +179,6 @@ class _Scene3Monitor(Monitor):
                 "initial_aperture": self.scene.initial_aperture()}
 
 
-@register
 class InclinedPenny(ClosedUnderStress, Scene):
     name = "inclined_penny"
     dimension = 3
@@ -221,11 +219,11 @@ class InclinedPenny(ClosedUnderStress, Scene):
     def block_recipe(self, snes_type):
         """The flow and heat fields {pm, pf, Tf, Tm} as one split before the
         mechanics, by GMRES to 1e-3 on ILU(0), and the glued elasticity by
-        CG on its cycle (``recipes.flow_heat_first_recipe``; docs/solvers.md,
-        stop 40).  Block Gauss-Seidel over five splits dropped the coupling among
-        the flow and heat fields, which made 56 % of the Krylov count on
-        coarse Scene 3's finest level (stop 36); the one split keeps it.  The
-        heat before the mechanics, as before: the rock's thermal stress
+        CG on its cycle (``recipes.flow_heat_first_recipe``; manual, solver
+        guide).  Block Gauss-Seidel over five splits drops the coupling among
+        the flow and heat fields, which makes 56 % of the Krylov count on
+        coarse Scene 3's finest level; the one split keeps it.  The
+        heat comes before the mechanics: the rock's thermal stress
         loads u, and the heat balances do not contain u.  Four steps after
         2 years, case 2, one run after the other beside a second run: coarse level 3
         (P1 u, 70 677 unknowns) 5.6 against 71.5 Krylov iterations per
@@ -241,7 +239,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
 
         One Chebyshev step on the P2 level of the glued elasticity's
         p-multigrid (three elsewhere): that level's products are most of a
-        Krylov iteration's cost here (stop 34).
+        Krylov iteration's cost here.
 
         Newton to a scaled residual of 1e-9 (``contact_block_recipe``).  At
         0.2-year steps the second

@@ -1,4 +1,4 @@
-"""Coupled THM scenes with a deformable fracture (physics.md sections 2-4,
+"""Coupled THM scenes with a deformable fracture (theory manual, "Equations: rock deformation",
 7-11).
 
 * ``penny_impermeable``: Scene 2 of the paper.  A horizontal penny fracture
@@ -11,7 +11,7 @@ The model is the half y >= 0 (the wells lie on the symmetry plane y = 0 and
 carry half their rate).  Tm = Tf on the fracture walls ("equilibrium", the
 default), or the walls exchange heat with hw = Nu lambda_f / (2 a) at the
 local aperture ("nusselt": local thermal non-equilibrium, the paper's model;
-docs/scene2.md).  The strain heating of section 6 is an option
+manual, Scene 2).  The strain heating of section 6 is an option
 (-thm_thermomechanical_heating, off by default as section 6 allows); the
 rock has no pores.
 """
@@ -40,7 +40,6 @@ from petthm.scenes.base import (
     TimeDefaults,
     constant,
     constant_in_time,
-    register,
     tip_tractions,
     zero,
 )
@@ -120,7 +119,7 @@ class _Scene2Monitor(Monitor):
         out["nodes_open"] = probes.global_count(comm, ~closed)
         opening, second = contact_node_checks(problem, OPEN_TRACTION * sc.lam0, X, t)
         out["closed_opening"] = probes.global_max(comm, [opening]) / sc.initial_aperture()
-        out.update(slip_columns(problem, X, t) if problem.model.friction is not None else
+        out.update(slip_columns(problem, X, t) if problem.model.friction_law is not None else
                    {"slip_max": np.nan, "slipping_area": np.nan})
         out["lam_roughness"] = np.nan if second is None else \
             probes.global_max(comm, second[self.regular_cells(problem)], empty=0.0) / sc.lam0
@@ -167,7 +166,6 @@ class _Scene2Monitor(Monitor):
         return out
 
 
-@register
 class PennyImpermeable(ClosedUnderStress, Scene):
     name = "penny_impermeable"
     dimension = 3
@@ -195,13 +193,13 @@ class PennyImpermeable(ClosedUnderStress, Scene):
 
     def block_recipe(self, snes_type):
         """``contact_block_recipe``: level 1 to 1e9 s, side by side
-        (docs/solvers.md, stop 36): 217 against 314 Newton iterations, 19 123
+        (manual, solver guide): 217 against 314 Newton iterations, 19 123
         against 25 628 Krylov, 147 against 193 s; injection pressure,
         production temperature, lam and aperture at the injector equal to
         2e-12 relative, mass balance 5.4e-7 either way.  The mechanics,
         then {pf, Tf, Tm} as one split, the glued elasticity by four CG
         iterations on its cycle (BoomerAMG with P1 u where PETSc has hypre)
-        (``recipes.closed_fracture_recipe``, stops 38-39)."""
+        (``recipes.closed_fracture_recipe``)."""
         return {**contact_block_recipe(), **closed_fracture_recipe(self.run.fe_degree)}
 
     # -- geometry -----------------------------------------------------------------------
@@ -263,7 +261,7 @@ class PennyImpermeable(ClosedUnderStress, Scene):
         b.fracture_flow(1, reference_aperture=a_ref, heat=True)         # lam, pf, Tf, Tm: always P1
         b.fracture_heat(1, reference_aperture=a_ref, lumped=p.scene2_lumped_heat)
         b.matrix_heat(1, lumped=p.scene2_lumped_heat)
-        # the producer's well index: the line formula 2 T / r_w (flow_dim 1), as in session 8's results
+        # the producer's well index: the line formula 2 T / r_w (flow_dim 1), the scene's documented choice
         wells = FractureWells(*self.wells_at(), heat=True, share=HALF, flow_dim=1)
         b.wells(wells.make(p, mesh, transmissivity(p, a_ref, T0)))
         base = heat_wells_monitor(b, wells, a_ref, TF_BOUNDS_WARNING,

@@ -5,7 +5,7 @@
                       D: 0 on closed rows (the semismooth row of an open
                       node of ``vinewtonssls`` is nearly lam = 0 instead)
 
-of the VI reduced system (physics.md section 3; kernels/contact.py).
+of the VI reduced system (theory manual, "Contact and friction"; kernels/contact.py).
 
 A closed ("glued") node i holds the normal opening at zero: the constraint
 glues the normal displacement of its two copies u+_i, u-_i.  With the pair
@@ -35,7 +35,7 @@ tau too (kernels/friction.py): a sticking node's tau rows glue the
 tangential jump as lam glues the normal one (a closed sticking node is
 glued whole), a slipping node's are rotated to its slip direction and
 eliminated (``nodeblocks.slip_rotation``, ``nodeblocks.block_inverse``;
-docs/solvers.md "Friction").
+manual, solver guide "Friction").
 
 Everything is a parallel PETSc matrix or vector operation (``glue``: the
 pairs, normals, weights and Z).  The lam-recovery map G = diag(1/c) P^T
@@ -55,7 +55,6 @@ from petthm.solvers.fieldsplit import mode_vectors, served_rows
 from petthm.solvers.glue import glue_maps, glued_basis
 from petthm.solvers.nodeblocks import block_inverse
 from petthm.solvers.nullspace import orthonormal_nullspace
-from petthm.solvers.timestepper import propose_defaults
 
 #: smoothing steps per multigrid level of the glued elasticity (default)
 SMOOTHING_STEPS = 3
@@ -86,9 +85,9 @@ class ContactNullspacePC:
             self._set_inner(pc, K, context, rows)                # u alone: its elasticity
             return
         if context.lam_below_u():
-            warn_once("with P2 u and a P1 contact traction (-thm_contact_pairing consistent) the glue "
-                      "holds only the fracture's vertices: the contact preconditioner is approximate and "
-                      "may fail on a closed fracture that cuts the domain (docs/solvers.md)")
+            context.warn_once("with P2 u and a P1 contact traction (-thm_contact_pairing consistent) "
+                              "the glue holds only the fracture's vertices: the contact preconditioner is "
+                              "approximate and may fail on a closed fracture that cuts the domain")
         self._own_maps = maps is None
         self.maps = glue_maps(K, context.contact(), rows) if maps is None else maps
         A = K.createSubMatrix(self.maps.iu, self.maps.iu)
@@ -156,7 +155,7 @@ class ContactNullspacePC:
         prefix = (pc.getOptionsPrefix() or "") + "contact_"
         # three smoothing steps per level unless the user says otherwise (Scene 2's
         # layered mesh, 58 k unknowns: 37 -> 30 Krylov per Newton at the same cost)
-        propose_defaults({prefix + "mg_levels_ksp_max_it": str(SMOOTHING_STEPS)})
+        context.proposals.propose({prefix + "mg_levels_ksp_max_it": str(SMOOTHING_STEPS)})
         self.ksp = PETSc.KSP().create(comm=comm)
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(AZ)
@@ -230,9 +229,6 @@ class ContactNullspacePC:
             self.ksp = None
 
 
-_WARNED: set = set()
-
-
 #: BoomerAMG's vector (nodal) interpolation, which needs an operator of nodal blocks
 VEC_INTERP = "pc_hypre_boomeramg_vec_interp_variant"
 
@@ -240,9 +236,9 @@ VEC_INTERP = "pc_hypre_boomeramg_vec_interp_variant"
 def refuse_vector_interpolation(prefix: str, A: PETSc.Mat) -> None:
     """A one-line error, not hypre's segmentation fault, for BoomerAMG's
     vector interpolation on the glued elasticity: its basis mixes a node's
-    components (block size 1), and hypre 2.26 crashed on it (docs/solvers.md:
-    Scene 2 in stop 31; partial_opening with ``-vi_fieldsplit_mech_contact_pc_type
-    hypre -vi_fieldsplit_mech_contact_pmg false ..._vec_interp_variant 3`` in stop 32)."""
+    components (block size 1), and hypre 2.26 crashes on it (Scene 2, and
+    partial_opening with ``-vi_fieldsplit_mech_contact_pc_type hypre
+    -vi_fieldsplit_mech_contact_pmg false ..._vec_interp_variant 3``)."""
     if A.getBlockSize() != 1:
         return
     bad = sorted(k for k in PETSc.Options().getAll() if k.startswith(prefix) and k.endswith(VEC_INTERP))
@@ -250,13 +246,6 @@ def refuse_vector_interpolation(prefix: str, A: PETSc.Mat) -> None:
         raise InputError(f"option -{bad[0]}: BoomerAMG's vector interpolation needs nodal blocks, and the "
                          "glued elasticity of the contact preconditioner has none (block size 1); "
                          "leave the option out")
-
-
-def warn_once(message: str) -> None:
-    """Print a warning on rank 0, once per run."""
-    if message not in _WARNED:
-        _WARNED.add(message)
-        PETSc.Sys.Print(f"petthm: warning: {message}")
 
 
 def _safe(a: np.ndarray) -> np.ndarray:

@@ -1,5 +1,5 @@
 """The Courant number of a temperature front over one time step (the
-``-thm_dt_courant`` limit, physics.md section 10): how many cells the front
+``-thm_dt_courant`` limit, theory manual, "Time stepping and solvers"): how many cells the front
 of an advected temperature moved in the step.
 
 An isotherm moves at |dT/dt| / |grad T|; over a step of length dt through a

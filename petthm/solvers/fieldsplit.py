@@ -28,6 +28,7 @@ from petthm import compat
 from petthm.discretisation import probes
 from petthm.errors import OPTION_ERRORS, InputError, petsc_option_errors
 from petthm.solvers.nullspace import orthonormal_nullspace
+from petthm.solvers.options import Proposals
 from petthm.solvers.sweep import LowerSweep
 
 #: the attribute of a PC through which ``solver.TimeStepper`` gives a Python
@@ -43,14 +44,24 @@ class SolverContext:
     the problem, its SNES (the VI inactive set), and structures computed once
     per run in the problem's global numbering."""
 
-    def __init__(self, problem, snes: PETSc.SNES | None = None):
+    def __init__(self, problem, snes: PETSc.SNES | None = None, proposals=None):
+        """``proposals``: the run's ``options.Proposals`` (the options a
+        preconditioner proposes for its inner solvers go there)."""
         self.problem = problem
+        self.proposals = proposals if proposals is not None else Proposals()
+        self._warned: set[str] = set()
         self._snes = weakref.ref(snes) if snes is not None else None
         names, isets, _ = problem.dm.createFieldDecomposition()
-        self.fields = {name: iset.getIndices().copy() for name, iset in zip(names, isets)}
+        self.fields = {name: iset.getIndices().copy() for name, iset in zip(names, isets, strict=False)}
         self._contact = None
         self._rigid = None
         self._interp = False                      # not made yet (None: u is not P2)
+
+    def warn_once(self, message: str) -> None:
+        """Print a warning on rank 0, once per run."""
+        if message not in self._warned:
+            self._warned.add(message)
+            PETSc.Sys.Print(f"petthm: warning: {message}")
 
     def rows(self, P: PETSc.Mat) -> np.ndarray:
         """The full-system unknowns of the operator's rows on this rank: the
@@ -267,7 +278,7 @@ class VIFieldSplit:
         maps = self._contact_maps(context, P, splits[first]) if first is not None else None
         # the splits' KSPs exist once their index sets are given (the Schur
         # type reports them only after its set-up: ask before the options make it one)
-        for k, (split, ksp) in enumerate(zip(splits, self.inner.getFieldSplitSubKSP())):
+        for k, (split, ksp) in enumerate(zip(splits, self.inner.getFieldSplitSubKSP(), strict=False)):
             own_maps = maps if k == first else None
             ksp.getPC().setAttr(SPLIT, (weakref.ref(context), split.rows, own_maps))
         opts = PETSc.Options(self.inner.getOptionsPrefix())
@@ -357,7 +368,7 @@ def mechanics_split(context: SolverContext, splits: list[Split]) -> int | None:
     without one: a field whose equation does not see u (the rock
     temperature: its thermal stress loads u, u does not enter its balance)
     placed before the mechanics makes that coupling exact in the
-    multiplicative sweep (docs/solvers.md, "Scene 3 at the default resolution")."""
+    multiplicative sweep (manual, solver guide, "Scene 3 at the default resolution")."""
     return next((k for k, s in enumerate(splits) if context.holds("u", s.rows)), None)
 
 
@@ -375,7 +386,7 @@ def contact_schur(opts: PETSc.Options) -> str:
     takes: ``all`` (default: every term of the u rows, the rock's body
     loads of the wall nodes tied into the split too), ``faces`` (the
     fracture terms of the u rows alone), ``off`` (no term).  Measured
-    (docs/solvers.md, stop 23): Scene 2 needs ``all`` (the thermal strain
+    (manual, solver guide): Scene 2 needs ``all`` (the thermal strain
     of the tied wall nodes: ``faces`` rejects 11 steps, as ``off`` does),
     the coupled MMS with the fracture closed needs ``faces`` (``all``
     rejects 3 of 7 steps)."""

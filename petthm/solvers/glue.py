@@ -1,4 +1,4 @@
-"""The algebra of the glued contact (physics.md section 3): which u unknowns
+"""The algebra of the glued contact (theory manual, "Contact and friction"): which u unknowns
 are the two copies of a closed fracture node, the normals, the lumped
 weights of the weak opening and of the face load, and the basis Z of the
 displacements that keep the closed nodes glued.  ``contactpc`` (the
@@ -101,7 +101,7 @@ def contact_structure(problem) -> ContactStructure:
     count.getArray()[:] = np.where(c > 0, 1.0 / np.maximum(c, 1.0), 1.0)
     pairs.diagonalScale(L=count)
     fields = {name: iset.getIndices().copy()
-              for name, iset in zip(*problem.dm.createFieldDecomposition()[:2])}
+              for name, iset in zip(*problem.dm.createFieldDecomposition()[:2], strict=False)}
     none = np.zeros(0, dtype=compat.INT)
     tangent_of = np.rint(tangent.getArray(readonly=True)).astype(int)
     out = ContactStructure(pairs, fields["u"], fields["lam"], fields.get("tau", none), tangent_of,

@@ -1,10 +1,10 @@
-"""Per-node block algebra of the contact rows (physics.md section 3): the
+"""Per-node block algebra of the contact rows (theory manual, "Contact and friction"): the
 rows of one fracture node (lam and the tau components of its friction law)
 couple only to each other, so their block of the operator is block
 diagonal.  ``node_blocks`` finds the blocks, ``block_inverse`` inverts them
 (the rows the contact preconditioner eliminates), ``slip_rotation`` turns a
 slipping node's tau rows to the slip direction (``glue.glue_maps``,
-``contactpc``; docs/solvers.md "Friction")."""
+``contactpc``; manual, solver guide "Friction")."""
 from __future__ import annotations
 
 import numpy as np
@@ -29,7 +29,7 @@ def node_blocks(D: PETSc.Mat, keep: np.ndarray):
     """The diagonal blocks of D over its owned rows ``keep`` (bool per owned
     row) for a D whose nonzeros couple only small groups of rows of one
     rank (the contact rows of one node: lam and the tau components of its
-    friction law, physics.md section 3): yields (rows (k, m), blocks
+    friction law, theory manual, "Contact and friction"): yields (rows (k, m), blocks
     (k, m, m)) per block size m, rows local, in the order of D."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components

@@ -3,7 +3,7 @@ block preconditioner as two levels, P2 smoothed on the fine level and the
 P1 (vertex) displacement as the coarse level, solved by algebraic multigrid.
 
 Aggregation AMG (GAMG) converges about three times slower on P2 elasticity
-than on P1 (docs/solvers.md), so the coarse space of P2 is given by the
+than on P1 (manual, solver guide), so the coarse space of P2 is given by the
 discretisation itself: the interpolation I from vertex values to P2 nodal
 values (a vertex node keeps its value, an edge node takes the mean of its
 two vertices).  PETSc's PCMG runs the cycle: Chebyshev/Jacobi smoothing of

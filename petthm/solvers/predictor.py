@@ -1,6 +1,6 @@
 """Newton's first iterate of a time step (``-thm_predictor``).
 
-Backward Euler (physics.md section 10) is unchanged: only the state Newton
+Backward Euler (theory manual, "Time stepping and solvers") is unchanged: only the state Newton
 starts from is.  PETSc's TS starts every step from the last accepted state.
 ``linear`` starts it from the line through the last two accepted states,
 
@@ -9,7 +9,7 @@ starts from is.  PETSc's TS starts every step from the last accepted state.
 so that the first Newton iteration corrects only what changes faster than
 linearly.  At Scene 2's long steps the first Newton iteration from X_n
 reduced the residual 4x and the second converged; from the line it reduces
-it ~1500x (docs/solvers.md, stop 39).  The VI Newton methods project the
+it ~1500x (manual, solver guide).  The VI Newton methods project the
 start onto the bounds.
 
 A step tried again after a failed solve, and the first two steps of a run

@@ -1,9 +1,9 @@
-"""The block preconditioner's option sets (docs/solvers.md): the recipe of
+"""The block preconditioner's option sets (manual, solver guide): the recipe of
 ``options/solvers/block.opts`` (``BLOCK_RECIPE``), the scenes' changes to it
 (their ``Scene.block_recipe``) and the size rule that proposes it in place
 of a direct solve (``solver_defaults_by_size``).  Every set is a dict of
 PETSc option names (no leading dash) and values; petthm inserts them only
-where the user's options database has no value (``solver.propose_defaults``)."""
+where the user's options database has no value (``options.Proposals``)."""
 from __future__ import annotations
 
 from petsc4py import PETSc
@@ -19,14 +19,14 @@ def prefixed(prefix: str, options: dict[str, str]) -> dict[str, str]:
 #: a split's solve by one application of GAMG (the recipe's pm, pf, Tf and Tm)
 GAMG_ONCE = {"ksp_type": "preonly", "pc_type": "gamg"}
 
-#: the block preconditioner of options/solvers/block.opts (docs/solvers.md), proposed by
+#: the block preconditioner of options/solvers/block.opts (manual, solver guide), proposed by
 #: ``solver_defaults_by_size`` for large problems with displacement; a test keeps the two equal
 BLOCK_RECIPE = {
     "ksp_type": "fgmres",
     "ksp_rtol": "1e-6",
     "ksp_max_it": "500",
     "ksp_gmres_restart": "100",
-    "ksp_gmres_cgs_refinement_type": "refine_ifneeded",   # the reported residual is the true one (stop 38)
+    "ksp_gmres_cgs_refinement_type": "refine_ifneeded",   # the reported residual is the true one
     "pc_type": "python",
     "pc_python_type": "petthm.solvers.fieldsplit.VIFieldSplit",
     "vi_groups": "mech=u+lam+tau,pm=pm,pf=pf,Tf=Tf,Tm=Tm",
@@ -41,8 +41,8 @@ BLOCK_RECIPE = {
 }
 
 
-#: BoomerAMG's settings for the glued elasticity of a layered mesh (docs/solvers.md,
-#: stops 38-39): a strength threshold of 0.8 (GAMG's aggregation does not follow the
+#: BoomerAMG's settings for the glued elasticity of a layered mesh (manual, solver guide,
+#: ): a strength threshold of 0.8 (GAMG's aggregation does not follow the
 #: strong couplings across a layered mesh's thin cells), HMIS coarsening, extended+i
 #: interpolation with at most 4 entries per row, aggressive coarsening on the first
 #: level and a forward / backward Gauss-Seidel sweep (a symmetric cycle for CG at
@@ -81,7 +81,7 @@ def glued(options: dict[str, str]) -> dict[str, str]:
 #: 3D Terzaghi, item 9's weak scaling on 1 / 2 / 4 / 8 ranks: 9.2 / 9.6 / 10.2 / 10.2 Krylov
 #: iterations per Newton iteration (1.11x) against 11.2 / 13.0 / 14.3 / 15.8 (1.41x), 7 % more
 #: wall time on one rank.  Not for Scene 3's default mesh: the same count there (335 / 338
-#: against 334 / 334 in six 0.2-year steps) for 14 % more CPU time (docs/solvers.md, stop 43)
+#: against 334 / 334 in six 0.2-year steps) for 14 % more CPU time (manual, solver guide)
 PMG_P1_NOT_AGGRESSIVE = {"mg_coarse_" + compat.GAMG_AGGRESSIVE_LEVELS: "0"}
 
 #: the glued elasticity of a 2D crack under ``vinewtonssls``: GAMG's graph threshold 0.05
@@ -89,8 +89,8 @@ PMG_P1_NOT_AGGRESSIVE = {"mg_coarse_" + compat.GAMG_AGGRESSIVE_LEVELS: "0"}
 #: couplings.  partial_opening, 1 022 to 124 164 unknowns: 6.2 / 7.4 / 7.8 Krylov per
 #: Newton at levels 1 / 3 / 5 against 9.9 / 15.9 / 24.9; level 5 68 against 65 s wall.
 #: Not for ``vinewtonrsls`` (16.1 -> 11.8 there, but 1.5x the wall time: the
-#: hierarchy's set-up and cycle cost more) nor in 3D (stop 28: the Galerkin products
-#: filled; docs/solvers.md, stop 41)
+#: hierarchy's set-up and cycle cost more) nor in 3D (the Galerkin products
+#: filled; manual, solver guide)
 SSLS_CRACK_GAMG = {"pc_gamg_threshold": "0.05", "pc_gamg_threshold_scale": "0"}
 
 
@@ -103,7 +103,7 @@ def flow_heat_recipe(groups: str, degree: int) -> dict:
     hypre (``BOOMERAMG``), else the recipe's GAMG; with P2 u its p-multigrid.
     Block Gauss-Seidel between the flow and heat fields dropped the coupling
     that made the Krylov count, and one cycle's error in the elasticity
-    multiplied it; each fix alone does little (docs/solvers.md, stops 39-40)."""
+    multiplied it; each fix alone does little (manual, solver guide)."""
     out = {"vi_groups": groups,
            **glued(GLUED_CG),
            **prefixed("vi_fieldsplit_flow_heat_", FLOW_HEAT_SPLIT)}
@@ -119,15 +119,14 @@ def closed_fracture_recipe(degree: int) -> dict:
     Scene 2 default, five 1.3-1.8e7-s steps: 13.8 against 85.0 Krylov
     iterations per Newton iteration, KSPSolve 6.8 against 26.7 s (GAMG, no
     hypre: 20.7 against 176.6, 25.1 against 49.1 s).  P2 u, level 1 to
-    1.7e7 s: 6.7 against 37.5 per Newton iteration (stop 39).
+    1.7e7 s: 6.7 against 37.5 per Newton iteration.
 
     With P2 u and hypre, BoomerAMG's cycle on the P2 glued elasticity
     itself, in place of the p-multigrid: the layered mesh's thin cells
     defeat the P2 level's Chebyshev/Jacobi smoothing, as they defeat GAMG's
     aggregation with P1 u.  Scene 2 default with P2 u (241 080 unknowns),
     two 9.4e6-s steps, side by side: 24.8 against 32.2 Krylov iterations
-    per Newton iteration, KSPSolve 110-112 against 182 s (docs/solvers.md,
-    stop 40).
+    per Newton iteration, KSPSolve 110-112 against 182 s (manual, solver guide).
 
     On the P2 level BoomerAMG coarsens without aggressive coarsening and
     takes eight CG iterations (``P2_GLUED_AMG``), and the flow and heat
@@ -136,7 +135,7 @@ def closed_fracture_recipe(degree: int) -> dict:
     Three 1-2e7-s steps at 2.1e8 s on levels 1 / 2 / 3 (32 013 / 98 844 /
     353 115 unknowns): 6.7 / 7.2 / 9.5 against 10.8 / 14.8 / 24.0 Krylov
     iterations per Newton iteration; on level 2, side by side, 16 % more
-    CPU time (docs/solvers.md, stop 42)."""
+    CPU time (manual, solver guide)."""
     out = flow_heat_recipe("mech=u+lam+tau,pm=pm,flow_heat=pf+Tf+Tm", degree)
     if degree == 2 and PETSc.Sys.hasExternalPackage("hypre"):
         out.update(glued({"pmg": "0", **BOOMERAMG, **P2_GLUED_AMG}), vi_contact_schur="off")

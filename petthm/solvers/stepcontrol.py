@@ -1,7 +1,7 @@
 """The time-step schedule's data: the scene's schedule (first step, growth,
 largest step, hit times), its collapse floor and step count, the recovery
 factor after rejected tries, and the options of ``-thm_dt_control error``
-(physics.md section 10).  ``solver.TimeStepper`` applies them."""
+(theory manual, "Time stepping and solvers").  ``solver.TimeStepper`` applies them."""
 from __future__ import annotations
 
 import math
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 RECOVERY = 2.0
 
 
-def error_control_defaults(control: "StepControl") -> dict[str, str]:
+def error_control_defaults(control: StepControl) -> dict[str, str]:
     """The TS options of ``-thm_dt_control error`` (proposed: a user's
     ``-ts_adapt_*``, ``-ts_atol``, ``-ts_rtol`` win).  PETSc's basic
     adaptivity on backward Euler's local error estimate (TSTheta: the step's

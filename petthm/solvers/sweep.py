@@ -24,15 +24,6 @@ from petsc4py import PETSc
 
 from petthm import compat
 
-#: the log events of the splits' solves (-log_view), by split name
-_EVENTS: dict[str, PETSc.Log.Event] = {}
-
-
-def _event(name: str) -> PETSc.Log.Event:
-    if name not in _EVENTS:
-        _EVENTS[name] = PETSc.Log.Event(f"VISweep_{name}")
-    return _EVENTS[name]
-
 
 class LowerSweep:
     """Block Gauss-Seidel over ``isets`` (the splits in their order) with the
@@ -44,7 +35,7 @@ class LowerSweep:
         comm = P.getComm()
         x = P.createVecRight()
         self.ksps = ksps
-        self.events = [_event(name) for name in names]
+        self.events = [PETSc.Log.Event(f"VISweep_{name}") for name in names]   # -log_view, by split
         self.scatters, self.rhs, self.sol, self.lower, self.lower_scatter = [], [], [], [], []
         self.lower_in, self.lower_out = [], []
         for k, iset in enumerate(isets):

@@ -1,132 +1,33 @@
 """TS (backward Euler) + SNES + KSP around a ``problem.Problem``: solver
-defaults, step control, VI bounds and field splits, monitors.
+step control, VI bounds and field splits, monitors (the solver options it
+starts from: ``solvers.options``).
 
-physics.md section 10: monolithic Newton inside backward Euler; user-set
+theory manual, "Time stepping and solvers": monolithic Newton inside backward Euler; user-set
 first step, growth factor and largest step; a failed nonlinear solve is
 retried with a step four times smaller (PETSc's TSAdapt does this), up to
 ``-ts_max_reject`` times, after which the run stops with the last accepted
-state.  Solver defaults are proposed here and inserted only where the user's
-options database has no value for the key.
+state.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 import traceback
-from typing import Callable
+from collections.abc import Callable
 
 from petsc4py import PETSc
 
-from petthm import compat
 from petthm.discretisation.problem import Problem
 from petthm.errors import InputError, WriteFailure
 from petthm.solvers import fieldsplit
 from petthm.solvers.courant import FrontStepLimit
 from petthm.solvers.fieldsplit import VIFieldSplit  # noqa: F401  (-pc_python_type petthm.solvers.timestepper.VIFieldSplit)
+from petthm.solvers.options import Proposals
 from petthm.solvers.predictor import LinearPredictor
 from petthm.solvers.snes_hooks import BiactiveRelease, PreconditionerReuse, SNESUpdates
 from petthm.solvers.stepcontrol import RECOVERY, StepControl, error_control_defaults  # noqa: F401  (re-exported)
 from petthm.solvers.viconvergence import VIConvergence
-
-SOLVER_DEFAULTS = {
-    "ts_type": "beuler",
-    "ts_adapt_type": "none",
-    "snes_type": "newtonls",
-    "snes_linesearch_type": "basic",
-    "snes_rtol": "1e-10",
-    "snes_atol": "1e-10",
-    "snes_stol": "1e-14",
-    "snes_max_it": "25",
-    "ksp_type": "gmres",
-    "ksp_rtol": "1e-10",
-    "ksp_atol": "1e-14",
-    "ksp_gmres_restart": "200",
-    "ksp_max_it": "2000",
-    "pc_type": "gamg",
-}
-
-
-def direct_solver_defaults(comm) -> dict[str, str]:
-    """A sparse direct solve: MUMPS, else SuperLU_dist, else PETSc's LU
-    (serial) or, in parallel, PETSc's LU on a redundant copy of the matrix."""
-    out = {"ksp_type": "gmres", "ksp_max_it": "50"}
-    for package in ("mumps", "superlu_dist"):
-        if PETSc.Sys.hasExternalPackage(package):
-            return dict(out, pc_type="lu", pc_factor_mat_solver_type=package)
-    # PETSc's own LU does not pivot: a zero pivot (the rows of the contact
-    # multipliers) is shifted and GMRES corrects the inexact LU.  The row swap
-    # of -pc_factor_nonzeros_along_diagonal that stops 17 used crashed
-    # (PETSc 3.26.1, segmentation fault: contact_patch 3D) or stalled
-    # (partial_opening, vinewtonssls) on the nodal contact rows of the dual
-    # pairing; with the shift alone every contact and friction case converges
-    lu = {"pc_factor_shift_type": "nonzero"}
-    if comm.size == 1:
-        return dict(out, pc_type="lu", **lu)
-    # on the gathered copy, PETSc 3.26.1's inode LU stopped with "Node size not
-    # yet supported" (error 56: Scene 2 with lumped heat terms on 2 ranks), so
-    # the copy is factored without inodes
-    redundant = {"redundant_" + k: v for k, v in lu.items()}
-    return dict(out, pc_type="redundant", redundant_pc_type="lu", mat_no_inode="", **redundant)
-
-
-def serial_plane_direct(defaults: dict[str, str], dim: int, ranks: int, bounded: bool) -> dict[str, str]:
-    """The direct solve of a serial 2D run without bounded unknowns: PETSc's
-    own LU in place of MUMPS or SuperLU_dist.  Measured (docs/performance.md):
-    on 2D meshes PETSc's triangular solves are 4-5x faster than MUMPS's
-    (P2 lauwerier, 3.7 k to 84 k unknowns) and its factorisation costs at most
-    2x MUMPS's, so a run that reuses its factorisation (-thm_pc_reuse) is
-    1.4-1.5x faster.  In 3D MUMPS factors ~4x faster (Scene 2, 13 k unknowns)
-    and stays; so does every contact run (the VI rows: PETSc's LU does not
-    pivot) and every parallel one."""
-    direct = defaults.get("pc_type") == "lu" and defaults.get("pc_factor_mat_solver_type") in ("mumps",
-                                                                                              "superlu_dist")
-    if not direct or dim != 2 or ranks != 1 or bounded:
-        return defaults
-    out = {k: v for k, v in defaults.items() if k != "pc_factor_mat_solver_type"}
-    return dict(out, pc_factor_mat_solver_type="petsc", pc_factor_shift_type="nonzero")
-
-
-#: option names petthm inserted itself (never reported as unused)
-PROPOSED: set[str] = set()
-
-
-def propose_defaults(defaults: dict[str, str]) -> None:
-    """Insert solver options the user has not set (the user's options always win)."""
-    opts = PETSc.Options()
-    for k, v in defaults.items():
-        if not opts.hasName(k):
-            opts.setValue(k, v)
-            PROPOSED.add(k)
-
-
-#: options PETSc reads only at finalize or start-up; never "unused"
-_LATE_OPTIONS = ("log_view", "options_left", "options_file", "help", "malloc", "info",
-                 "memory_view", "log_", "on_error", "no_signal_handler", "fp_trap",
-                 "check_pointer_intensity", "viewer_binary", "history", "options_monitor", "mpi_")
-
-
-#: a solver recipe may set the split of a field the scene does not have
-_RECIPE_SPLITS = tuple(f"{pre}fieldsplit_{f}_" for f in ("u", "pm", "pf", "Tm", "Tf", "lam",
-                                                         "rest") for pre in ("", "vi_"))
-
-
-def check_unused_petsc_options() -> None:
-    """Raise InputError naming the first option nothing has read (a misspelling)."""
-    left = [o for o in compat.unused_options()
-            if not o.startswith(_LATE_OPTIONS + _RECIPE_SPLITS) and o not in PROPOSED]
-    if left:
-        raise InputError(f"option -{left[0]} was not used by any solver or petthm component "
-                         "(misspelt, or not valid for this scene)")
-
-
-def drop_unused_proposals() -> None:
-    """Remove the solver options petthm proposed that no solver read (e.g.
-    the direct-solver defaults when a recipe picks another preconditioner),
-    so that PETSc's report of unused options at exit names only the user's."""
-    opts = PETSc.Options()
-    for o in compat.unused_options():
-        if o in PROPOSED:
-            opts.delValue(o)
 
 
 def failure_message(ts: PETSc.TS) -> str:
@@ -157,7 +58,10 @@ class TimeStepper:
     predictor: LinearPredictor | None = None     # Newton's start of a step (-thm_predictor)
 
     def __init__(self, problem: Problem, control: StepControl,
-                 monitor: Callable[[int, float, float], None] | None = None):
+                 monitor: Callable[[int, float, float], None] | None = None,
+                 proposals: Proposals | None = None):
+        """``proposals``: the run's ``options.Proposals``, which petthm's Python
+        preconditioners add their own proposals to (a new one if None)."""
         self.problem, self.control = problem, control
         ts = self.ts = PETSc.TS().create(comm=problem.dm.comm)
         ts.setDM(problem.dm)
@@ -178,14 +82,15 @@ class TimeStepper:
         if not ts.getMaxTime() > 0.0:
             raise InputError(f"option -ts_max_time = {ts.getMaxTime():g}: the end time must be > 0 s "
                              "(or use -thm_final_time)")
-        control.final_time = ts.getMaxTime()
+        #: the schedule this stepper runs: the caller's, with -ts_max_time's end if given
+        self.control = control = dataclasses.replace(control, final_time=ts.getMaxTime())
         self.snes = ts.getSNES()
         self.updates = SNESUpdates()
         self.snes.setUpdate(self.updates)
         if problem.model.bounds:
             self._set_bounds(ts.getSNES())
         pc = ts.getSNES().getKSP().getPC()
-        self.context = fieldsplit.SolverContext(problem, self.snes)
+        self.context = fieldsplit.SolverContext(problem, self.snes, proposals)
         self._set_field_splits(pc)
         # a reused factorisation is an inexact solve: a Krylov method must correct it
         krylov = ts.getSNES().getKSP().getType() != "preonly"
@@ -291,7 +196,7 @@ class TimeStepper:
         a full step and a sliver: a sliver 1e3 times shorter than the steps
         around it (Scene 3 at 20 years: 6 500 s after 0.2-year steps) fails
         its linear solve with a preconditioner kept from the long steps, and
-        its rejection used to restart the growth from the sliver."""
+        its rejection would restart the growth from the sliver."""
         landed = self._landing(t, dt)
         if landed != dt:
             self._last_dt_cut, dt = dt, landed

@@ -9,7 +9,7 @@ iteration whose residual sits on its round-off floor above atol then runs to
 -snes_max_it with updates of the size of x's last bits, and the time step is
 rejected.  This happened with thin rock layers next to the fracture (Scene 3,
 a first layer of 0.22 m: the scaled residual 6.5e-11, 4.3e-12, then 3.7-5.0e-12
-for 21 iterations, each update |dx| = 2.4e-14 against |x| = 8.0; docs/scene3.md).
+for 21 iterations, each update |dx| = 2.4e-14 against |x| = 8.0; manual, Scene 3).
 
 ``VIConvergence``, installed for vinewtonrsls, is the VI test plus the
 step-length test that -snes_stol documents for every SNES: converged when

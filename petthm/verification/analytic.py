@@ -2,16 +2,16 @@
 
 ``talbot``: numerical inverse Laplace transform (fixed Talbot contour,
 Abate & Valko 2004), vectorised over the contour nodes.
-``leakoff_outlet_temperature``: verification.md section 2, fracture heat
+``leakoff_outlet_temperature``: manual, verification, fracture heat
 transport with a uniform leakoff fraction m (matrix advection on or off).
-``lauwerier_temperature``: verification.md section 1.
+``lauwerier_temperature``: manual, verification.
 ``erfc``: the complementary error function over arrays, from the C
 library's (``math.erfc``): the scenes that need only it do not import
-scipy.special (0.06 s of a small run's start, docs/performance.md).
+scipy.special (0.06 s of a small run's start, manual, performance).
 ``increasing_root``: the root of a function that changes sign once on each
 of several brackets, by bisection vectorised over the brackets.
 ``series_sum``: a Fourier series over many points, term by term (the
-Terzaghi and Mandel references, verification.md section 6).
+Terzaghi and Mandel references, manual, verification).
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ def series_sum(x, frequencies, coefficients, f) -> np.ndarray:
     c = np.asarray(coefficients, dtype=float)
     smallest = NEGLIGIBLE_TERM * np.abs(c).max()
     out = np.zeros(np.shape(x))
-    for w, k in zip(c, frequencies):
+    for w, k in zip(c, frequencies, strict=False):
         if abs(w) > smallest:
             out += w * f(x * k)
     return out
@@ -55,7 +55,7 @@ def increasing_root(f, lo, hi, iterations: int = 80) -> np.ndarray:
 
 
 def lauwerier_temperature(x, t, q, aperture, rho_c, conductivity, fluid_rho_c, T0, Ti):
-    """Lauwerier (1955) fracture temperature (verification.md section 1):
+    """Lauwerier (1955) fracture temperature (manual, verification):
     T0 + (Ti - T0) erfc(lambda x / (rho_f c_f q sqrt(kappa (t - t_d)))) U(t - t_d),
     t_d = a x / q, kappa = lambda / (rho C); q per metre of fracture height.
     q = 0 (a shut-in): nothing enters, the state at rest T0 everywhere."""
@@ -82,7 +82,7 @@ def talbot(F, t: float, M: int = 32) -> float:
 
 def leakoff_outlet_temperature(x, t, *, q0, m, L, fluid_rho_c, rock_rho_c, rock_conductivity, T0, Tinj,
                                advection=True):
-    """Fracture temperature at x (verification.md section 2): leakoff velocity
+    """Fracture temperature at x (manual, verification): leakoff velocity
     v_L = m q0 / (2 L) through each face, matrix heat capacity C_m = rock_rho_c.
 
     Laplace domain: r(s) = [P - sqrt(P^2 + 4 lambda C_m s)] / (2 lambda), P = rho_f c_f v_L,

@@ -72,7 +72,7 @@ def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps=1e
     X, Xdot, J = _perturbed_state(problem, t, shift, rng)
     names, isets, _ = problem.dm.createFieldDecomposition()
     lo = X.getOwnershipRange()[0]
-    rows = {n: iset.getIndices() - lo for n, iset in zip(names, isets)}
+    rows = {n: iset.getIndices() - lo for n, iset in zip(names, isets, strict=False)}
     comm = problem.dm.comm.tompi4py()
     out = {}
     for trial in names:

@@ -1,5 +1,5 @@
 """A manufactured solution of the fully coupled THM system with a fracture
-(verification.md section 8), and its sources, generated with sympy.
+(manual, verification), and its sources, generated with sympy.
 
 The domain is the unit square or cube; the fracture Gamma is the plane
 zeta = 1/2 of the last coordinate zeta (y in 2D, z in 3D) and crosses the
@@ -15,7 +15,7 @@ affine in t, so backward Euler adds no time error:
   (``open``: lam = 0), or u is continuous and the contact traction is a
   manufactured lam(xi, t) > 0 (``closed``: a = a0 - lam/Kn).
 
-The sources are the simulator's own strong form (physics.md sections 2-8
+The sources are the simulator's own strong form (theory manual, "Equations: rock deformation"
 as the kernels implement them; the docstrings there):
 
 * rock, on each half: f_u = -div sigma, sigma = C:eps - alpha (pm - p0) I
@@ -39,8 +39,8 @@ Every function returned takes (x (..., d), t) and evaluates with numpy
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

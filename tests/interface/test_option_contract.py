@@ -2,12 +2,11 @@
 which -thm_fracture_aperture, -thm_fracture_normal_stiffness,
 -thm_insitu_stress, -thm_initial_pressure and -thm_initial_temperature apply
 accepts them, and each changes the result as the physics says."""
-import csv
 
 import numpy as np
 import pytest
 
-from conftest import run_petthm
+from conftest import read_csv, run_petthm
 
 PENNY_COARSE = ("-thm_fe_degree", 1, "-thm_scene2_fracture_size", 20, "-thm_scene2_well_size", 10,
                 "-thm_scene2_layer", 2, "-thm_scene2_layer_growth", 2.5, "-thm_mesh_size", 150,
@@ -18,7 +17,7 @@ LAUWERIER_COARSE = ("-thm_fe_degree", 1, "-thm_mesh_size", 20, "-thm_lauwerier_f
 
 def first_row(outdir):
     """The history row of the initial state (step 0)."""
-    return {k: float(v) for k, v in next(csv.DictReader(open(outdir / "history.csv"))).items() if v != ""}
+    return {k: float(v) for k, v in read_csv(outdir / "history.csv")[0].items() if v != ""}
 
 
 def test_contact_patch_takes_the_contract_names(tmp_path):
@@ -92,7 +91,7 @@ def test_lauwerier_takes_the_contract_names(tmp_path):
         run_petthm("lauwerier", tmp_path / name, *LAUWERIER_COARSE, "-thm_fracture_aperture", a,
                    "-thm_initial_pressure", 1e6, "-thm_production_pressure", 1e6, "-thm_initial_temperature",
                    90)
-        h = list(csv.DictReader(open(tmp_path / name / "history.csv")))
+        h = (read_csv(tmp_path / name / "history.csv"))
         assert float(h[0]["injection_pressure"]) == pytest.approx(1e6, rel=1e-12)
         assert float(h[0]["production_temperature"]) == pytest.approx(90.0, abs=1e-9)
         dp[name] = float(h[-1]["injection_pressure"]) - 1e6
@@ -119,12 +118,11 @@ def test_no_scene_declares_an_option_twice():
     """Each -thm_ option of every scene is declared once (one type, one help)."""
     from petthm import params
     from petthm.physics import materials
-    from petthm.scenes import load_all
-    from petthm.scenes.base import REGISTRY
-    load_all()
-    for name, cls in REGISTRY.items():
+    from petthm.scenes import all_scenes
+    scenes = all_scenes()
+    for _name, cls in scenes.items():
         params.merged(cls.parameters)                 # raises on a duplicate
-    names = [f for cls in REGISTRY.values() for g in cls.parameters for f in g.__dataclass_fields__]
+    names = [f for cls in scenes.values() for g in cls.parameters for f in g.__dataclass_fields__]
     for contract in ("fracture_aperture", "fracture_normal_stiffness", "insitu_stress", "initial_pressure",
                      "initial_temperature", "rock_permeability", "fluid_viscosity"):
         assert contract in materials.DECLARED and names.count(contract) >= 2, contract
@@ -132,18 +130,15 @@ def test_no_scene_declares_an_option_twice():
 
 
 def test_each_scene_loads_from_its_module_alone():
-    """scenes.MODULES names the module that registers each scene (a run imports
-    only that one): every registered scene is in it, with its module; a scene
-    missing from it would still load (through load_all), so the map is checked
-    both ways."""
+    """scenes.MODULES names the module that defines each scene (a run imports
+    only that one): every scene its modules define is in it, with its module,
+    and the other way round."""
     import subprocess
     import sys
 
     from petthm import scenes
-    from petthm.scenes.base import REGISTRY
-    scenes.load_all()
-    assert {n: c.__module__.rsplit(".", 1)[-1] for n, c in REGISTRY.items()} == scenes.MODULES
-    code = ("from petthm import scenes; from petthm.scenes.base import REGISTRY; scenes.load('lauwerier'); "
-            "import sys; print(sorted(REGISTRY), 'petthm.scenes.contact' in sys.modules)")
+    assert {n: c.__module__.rsplit(".", 1)[-1] for n, c in scenes.all_scenes().items()} == scenes.MODULES
+    code = ("from petthm import scenes; c = scenes.scene_class('lauwerier'); "
+            "import sys; print(c.name, 'petthm.scenes.contact' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "['lauwerier'] False"
+    assert out.strip() == "lauwerier False"

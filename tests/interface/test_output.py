@@ -1,11 +1,10 @@
 """Run output: summary.json, history.csv and XDMF that meshio reads back."""
-import csv
 
 import meshio
 import numpy as np
 import pytest
 
-from conftest import run_petthm
+from conftest import read_csv, run_petthm
 
 
 @pytest.mark.parametrize("dim,degree,size,cell", [(2, 2, 0.125, "triangle6"), (3, 2, 0.25, "tetra10"),
@@ -37,7 +36,7 @@ def test_summary_and_history_contents(tmp_path):
         assert key in s, key
     assert s["status"] == "completed" and s["dofs"]["Tm"] > 0
     assert set(s["wall_time"]) >= {"mesh", "setup", "solve", "output", "total"}
-    rows = list(csv.DictReader(open(tmp_path / "history.csv")))
+    rows = (read_csv(tmp_path / "history.csv"))
     assert list(rows[0])[:6] == ["step", "time", "dt", "snes_its", "ksp_its", "wall"]
     assert [int(r["step"]) for r in rows] == list(range(s["steps"] + 1))
     assert sum(int(r["snes_its"]) for r in rows) == s["snes_iterations"]

@@ -2,8 +2,6 @@
 a signal continues with -thm_restart to the uninterrupted run's final
 state, on the same or another rank count (values are keyed by the serial
 mesh's points, not by the partition)."""
-import csv
-import json
 import os
 import signal
 import subprocess
@@ -14,7 +12,17 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import MPI_ENV, ROOT, checkpoint_state, ranks_of, run_petthm, solver_without_parallel_direct
+from conftest import (
+    MPI_ENV,
+    ROOT,
+    checkpoint_state,
+    ranks_of,
+    read_csv,
+    read_json,
+    read_text,
+    run_petthm,
+    solver_without_parallel_direct,
+)
 from petthm.io.output import read_output
 
 #: a coarse lauwerier (128 steps in ~2 s): what is tested is the restart, not the resolution
@@ -37,7 +45,7 @@ def _wait_for(path, rows=0, timeout=300):
     """Until ``path`` exists (and, for a CSV, has more than ``rows`` rows)."""
     end = time.time() + timeout
     while time.time() < end:
-        if os.path.exists(path) and (not rows or sum(1 for _ in open(path)) > rows + 1):
+        if os.path.exists(path) and (not rows or len(read_text(path).splitlines()) > rows + 1):
             return
         time.sleep(0.05)
     raise AssertionError(f"{path} did not appear")
@@ -56,7 +64,7 @@ def _final_output(outdir, name="Tm"):
 
 
 def _times(outdir):
-    return [float(r["time"]) for r in csv.DictReader(open(os.path.join(outdir, "history.csv")))]
+    return [float(r["time"]) for r in read_csv(os.path.join(outdir, "history.csv"))]
 
 
 @pytest.mark.parametrize("scene,options,every", [
@@ -120,7 +128,6 @@ def test_signal_checkpoints_and_stops_then_restart_on_two_ranks_or_one(tmp_path)
     srun SIGTERM reaches the ranks themselves).  The restart on 2 ranks, and
     one on 1 rank from a copy of the folder, reach the uninterrupted 2-rank
     run's final state (1e-10: the partitions differ from run to run)."""
-    import json
     import shutil
     scene, options = LAUWERIER
     run_petthm(scene, tmp_path / "ref", *options, ranks=2)
@@ -129,7 +136,7 @@ def test_signal_checkpoints_and_stops_then_restart_on_two_ranks_or_one(tmp_path)
     _wait_for(out / "history.csv", rows=5)
     proc.send_signal(signal.SIGUSR1)
     stdout, stderr = proc.communicate(timeout=120)
-    s = json.load(open(out / "summary.json"))
+    s = read_json(out / "summary.json")
     assert proc.returncode == 3, stdout + stderr
     assert s["status"] == "interrupted" and "SIGUSR1" in s["message"] and "Traceback" not in stderr
     assert os.path.exists(out / "checkpoint.h5") and s["final_time"] < 1e6
@@ -158,8 +165,7 @@ def test_sigterm_stops_a_serial_run(tmp_path):
     _wait_for(out / "history.csv", rows=3)
     proc.send_signal(signal.SIGTERM)
     proc.communicate(timeout=120)
-    import json
-    s = json.load(open(out / "summary.json"))
+    s = read_json(out / "summary.json")
     assert proc.returncode == 3 and s["status"] == "interrupted" and "SIGTERM" in s["message"]
     assert os.path.exists(out / "checkpoint.h5")
 
@@ -187,6 +193,6 @@ def test_a_restart_alone_goes_on_in_its_folder(tmp_path):
     proc = subprocess.run(cmd, cwd=tmp_path, env=dict(os.environ, **MPI_ENV), capture_output=True, text=True,
                           timeout=600)
     assert proc.returncode == 0, proc.stderr
-    summary = json.load(open(out / "summary.json"))
+    summary = read_json(out / "summary.json")
     assert summary["status"] == "completed" and summary["final_time"] == float(options[-1])
     assert (out / "fracture_final.npz").exists() and not (tmp_path / "output").exists()

@@ -4,8 +4,6 @@ PETTHM_CONTINUE=1), which restarts from the checkpoint and completes.  srun
 and sbatch are stand-ins on PATH: srun runs the command (and, when asked,
 sends it SIGTERM once history.csv has rows, as SLURM's --signal does);
 sbatch writes its arguments to a file."""
-import csv
-import json
 import os
 import shlex
 import stat
@@ -14,7 +12,7 @@ import sys
 
 import pytest
 
-from conftest import MPI_ENV, ROOT
+from conftest import MPI_ENV, ROOT, read_csv, read_json, read_text
 
 SRUN = """#!/bin/bash
 "$@" &
@@ -57,19 +55,19 @@ def test_a_job_stopped_before_its_time_limit_chains_its_restart(slurm, tmp_path)
     args = ("lauwerier", "options/scenes/lauwerier.opts", "-thm_final_time", "1e6", "-thm_quiet")
     first = slurm("run_scene.sbatch", *args, FAKE_SIGNAL_AFTER_ROWS="4")
     out = tmp_path / "out"
-    summary = json.load(open(out / "summary.json"))
+    summary = read_json(out / "summary.json")
     assert first.returncode == 3 and summary["status"] == "interrupted", first.stdout + first.stderr
     assert (out / "checkpoint.h5").exists() and list(out.glob("log_view-4242.txt"))
-    submitted = shlex.split(open(tmp_path / "sbatch.log").read())
+    submitted = shlex.split(read_text(tmp_path / "sbatch.log"))
     assert submitted[0] == "--dependency=afterany:4242"
     assert submitted[1].startswith("--export=ALL,PETTHM_CONTINUE=1,PETTHM_OUT=")
     assert submitted[2:] == ["slurm/run_scene.sbatch", *args]
     second = slurm("run_scene.sbatch", *args, PETTHM_CONTINUE="1")    # the chained job
-    summary = json.load(open(out / "summary.json"))
+    summary = read_json(out / "summary.json")
     assert second.returncode == 0 and summary["status"] == "completed", second.stdout + second.stderr
-    times = [float(r["time"]) for r in csv.DictReader(open(out / "history.csv"))]
+    times = [float(r["time"]) for r in read_csv(out / "history.csv")]
     assert times[-1] == pytest.approx(1e6) and len(times) == len(set(times))
-    assert len(open(tmp_path / "sbatch.log").read().splitlines()) == 1    # a completed run ends the chain
+    assert len(read_text(tmp_path / "sbatch.log").splitlines()) == 1    # a completed run ends the chain
 
 
 def test_scene_scripts_name_their_scene_and_resubmit_themselves():
@@ -77,7 +75,7 @@ def test_scene_scripts_name_their_scene_and_resubmit_themselves():
     signal, and resubmits itself (not the generic script)."""
     for script, scene in (("scene1", "rigid_fracture"), ("scene2", "penny_impermeable"),
                           ("scene3", "inclined_penny")):
-        text = open(os.path.join(ROOT, "slurm", f"{script}.sbatch")).read()
+        text = read_text(os.path.join(ROOT, "slurm", f"{script}.sbatch"))
         for directive in ("--ntasks=", "--time=", "--signal=TERM@"):
             assert f"#SBATCH {directive}" in text, (script, directive)
         assert f"petthm_job slurm/{script}.sbatch {scene} options/scenes/{scene}.opts" in text

@@ -4,7 +4,6 @@ only, at its third call."""
 import sys
 
 from petthm.__main__ import main
-from petthm.scenes import load_all
 
 
 def _inject(rank: int) -> None:
@@ -25,6 +24,5 @@ if __name__ == "__main__":
     sys.argv = ["petthm", "heat_erfc", "-thm_output_dir", outdir, "-thm_quiet"]
     import petsc4py
     petsc4py.init(sys.argv)             # as main would: before the scenes import PETSc
-    load_all()
     _inject(rank)
     sys.exit(main())

@@ -64,7 +64,7 @@ def test_fracture_scene_parallel_matches_serial(tmp_path, scene, opts):
     (s1, h1, (x1, v1)), (s2, h2, (x2, v2)) = runs[1], runs[2]
     assert s1["dofs"] == s2["dofs"] and len(h1) == len(h2)
     worst = 0.0
-    for a, b in zip(h1, h2):
+    for a, b in zip(h1, h2, strict=False):
         for k in ("injection_pressure", "production_temperature", "production_rate"):
             worst = max(worst, abs(float(a[k]) - float(b[k])) / max(abs(float(a[k])), 1e-300))
     assert np.allclose(x1, x2, rtol=0, atol=1e-9)
@@ -130,7 +130,7 @@ def test_scene2_parallel_matches_serial(tmp_path):
     assert s1["dofs"] == s2["dofs"] and len(h1) == len(h2)
     keys = ("injection_pressure", "production_temperature", "lam_injector", "aperture_injector", "lam_min")
     worst = max(abs(float(a[k]) - float(b[k])) / max(abs(float(a[k])), 1e-300)
-                for a, b in zip(h1, h2) for k in keys)
+                for a, b in zip(h1, h2, strict=False) for k in keys)
     assert np.allclose(x1, x2, rtol=0, atol=1e-9)
     field = np.abs(v2 - v1).max() / np.abs(v1).max()
     print(f"penny_impermeable: 2 ranks vs serial: histories {worst:.1e}, final Tm {field:.1e}")
@@ -155,7 +155,7 @@ def test_scene3_parallel_matches_serial(tmp_path):
     keys = ("injection_pressure", "production_pressure", "production_temperature", "aperture_increase_max",
             "lam_min", "raised_area", "nodes_open", "aperture_identity")
     # each column relative to its largest value (the aperture increase starts at 0; the identity is 0)
-    worst = max(max(abs(float(a[k]) - float(b[k])) for a, b in zip(h1, h2)) /
+    worst = max(max(abs(float(a[k]) - float(b[k])) for a, b in zip(h1, h2, strict=False)) /
                 max(max(abs(float(a[k])) for a in h1), 1e-300) for k in keys)
     assert np.allclose(x1, x2, rtol=0, atol=1e-9)
     field = max(np.abs(v2 - v1).max() / np.abs(v1).max(), np.abs(p2 - p1).max() / np.abs(p1).max())

@@ -3,7 +3,6 @@ replaces another run's output unless asked (-thm_overwrite), and then only
 the files of that run's manifest; a folder in use is locked; a run refused
 for its input leaves the folder as it found it."""
 import fcntl
-import json
 import os
 import signal
 import subprocess
@@ -12,7 +11,7 @@ import time
 
 from petsc4py import PETSc
 
-from conftest import LAUWERIER_COARSE, MPI_ENV, ROOT, folder_digests, run_petthm
+from conftest import LAUWERIER_COARSE, MPI_ENV, ROOT, folder_digests, read_json, read_text, run_petthm
 
 ERFC = ("heat_erfc", "-thm_final_time", 1e3)
 LAUWERIER = (*LAUWERIER_COARSE, "-thm_final_time", 1e6)
@@ -44,7 +43,7 @@ def test_a_finished_run_is_refused_then_replaced_with_overwrite_keeping_the_user
     names = set(os.listdir(out))
     assert {"my.opts", "job.log", "mine.msh"} <= names
     assert not any(n.startswith("fracture") for n in names), names
-    assert json.load(open(out / "manifest.json"))["files"]
+    assert read_json(out / "manifest.json")["files"]
 
 
 def test_the_default_folder_follows_the_same_rules(tmp_path):
@@ -100,9 +99,9 @@ def test_two_runs_into_one_folder_the_second_stops_and_the_first_keeps_its_histo
     msg = _one_error_line(proc)
     assert proc.returncode == 2 and f":{a.pid}" in msg, msg
     assert a.returncode == 0
-    summary = json.load(open(out / "summary.json"))
+    summary = read_json(out / "summary.json")
     assert summary["provenance"]["parameters"]["-thm_rock_conductivity"] == 2.88
-    times = [line.split(",")[1] for line in open(out / "history.csv").read().splitlines()[1:]]
+    times = [line.split(",")[1] for line in read_text(out / "history.csv").splitlines()[1:]]
     assert len(times) == len(set(times)) == summary["steps"] + 1
 
 

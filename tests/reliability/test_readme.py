@@ -8,7 +8,7 @@ import subprocess
 
 import pytest
 
-from conftest import MPI_ENV, ROOT, run_petthm
+from conftest import MPI_ENV, ROOT, read_text, run_petthm
 
 
 def _block_after(text: str, marker: str) -> str:
@@ -18,7 +18,7 @@ def _block_after(text: str, marker: str) -> str:
 
 
 def test_the_readmes_commands_work_in_a_fresh_shell(tmp_path):
-    readme = open(os.path.join(ROOT, "README.md")).read()
+    readme = read_text(os.path.join(ROOT, "README.md"))
     activate = _block_after(readme, "Then put petthm on your shell")
     running = _block_after(readme, "## Running\n")
     assert activate.strip().startswith("source .venv/bin/activate")
@@ -55,10 +55,8 @@ NO_REFERENCE = {"rigid_fracture", "penny_impermeable", "inclined_penny", "partia
 def test_every_verification_scene_prints_its_errors_at_the_end(tmp_path, scene):
     from test_restart_consistency import WHOLE_RUN
 
-    from petthm.scenes import load_all
-    from petthm.scenes.base import REGISTRY
-    load_all()
-    assert set(REGISTRY) - NO_REFERENCE == set(PRINTS_ERRORS) | set(WHOLE_RUN)
+    from petthm.scenes import all_scenes
+    assert set(all_scenes()) - NO_REFERENCE == set(PRINTS_ERRORS) | set(WHOLE_RUN)
     proc, s = run_petthm(scene, tmp_path, *PRINTS_ERRORS[scene], check=False)
     assert proc.returncode in (0, 4), proc.stderr
     line = next(x for x in proc.stdout.splitlines() if x.startswith("errors against the reference: "))

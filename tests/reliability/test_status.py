@@ -2,7 +2,6 @@
 "Status"): 0 completed, 1 failed, 2 input error, 3 interrupted by a signal
 or stopped by -thm_max_wall (continued with -thm_restart), 4 stopped by
 -ts_max_steps (a limit the user set)."""
-import json
 import os
 import signal
 import subprocess
@@ -13,7 +12,7 @@ import numpy as np
 import pytest
 
 from conftest import LAUWERIER_COARSE as LAUWERIER
-from conftest import MPI_ENV, ROOT, checkpoint_state, ranks_of, run_petthm
+from conftest import MPI_ENV, ROOT, checkpoint_state, ranks_of, read_json, read_text, run_petthm
 
 
 def _state(folder):
@@ -59,14 +58,14 @@ def test_a_signal_to_the_ranks_checkpoints_and_exits_3(tmp_path, ranks, sig):
                             stderr=subprocess.PIPE, text=True)
     end = time.time() + 120
     while time.time() < end and proc.poll() is None and not (
-            os.path.exists(out / "history.csv") and sum(1 for _ in open(out / "history.csv")) > 4):
+            os.path.exists(out / "history.csv") and len(read_text(out / "history.csv").splitlines()) > 4):
         time.sleep(0.02)
     pids = ranks_of(proc.pid) if ranks > 1 else [proc.pid]
     assert len(pids) == ranks
     for pid in pids:
         os.kill(pid, getattr(signal, sig))
     stdout, stderr = proc.communicate(timeout=120)
-    s = json.load(open(out / "summary.json"))
+    s = read_json(out / "summary.json")
     assert proc.returncode == 3, stdout + stderr
     assert s["status"] == "interrupted" and sig in s["message"] and "Traceback" not in stderr
     assert _state(out)[1] == s["final_time"] < 1e8

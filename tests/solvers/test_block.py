@@ -1,11 +1,10 @@
 """The block preconditioner of options/solvers/block.opts (issue 12): the
 Schur-complement approximations it is built on, each against its negative
 control, and parallel runs against serial ones."""
-import csv
 
 import pytest
 
-from conftest import ROOT, run_petthm
+from conftest import ROOT, read_csv, read_text, run_petthm
 
 BLOCK = ("-options_file", f"{ROOT}/options/solvers/block.opts")
 EXACT_SUBSOLVES = ("-vi_fieldsplit_mech_contact_pc_type", "lu", "-vi_fieldsplit_pm_pc_type", "lu",
@@ -14,7 +13,7 @@ EXACT_SUBSOLVES = ("-vi_fieldsplit_mech_contact_pc_type", "lu", "-vi_fieldsplit_
 
 def krylov_per_newton(outdir) -> list[float]:
     """Krylov iterations per Newton iteration of every step."""
-    rows = list(csv.DictReader(open(outdir / "history.csv")))[1:]
+    rows = (read_csv(outdir / "history.csv"))[1:]
     return [int(r["ksp_its"]) / max(int(r["snes_its"]), 1) for r in rows]
 
 
@@ -209,7 +208,7 @@ def test_the_recipe_file_is_the_size_default():
     -thm_direct_max_unknowns are the same options."""
     from petthm.solvers.recipes import BLOCK_RECIPE
     opts = {}
-    for line in open(f"{ROOT}/options/solvers/block.opts"):
+    for line in read_text(f"{ROOT}/options/solvers/block.opts").splitlines():
         line = line.split("#")[0].split()
         if line:
             opts[line[0].lstrip("-")] = line[1] if len(line) > 1 else ""
@@ -242,17 +241,15 @@ def test_a_scene_changes_the_block_recipe():
 
     from petsc4py import PETSc
 
-    from petthm.scenes import load
-    from petthm.scenes.base import REGISTRY
+    from petthm.scenes import scene_class
     from petthm.solvers.recipes import BLOCK_RECIPE, solver_defaults_by_size
 
     def recipe_of(scene, degree, snes_type="vinewtonrsls"):
-        return REGISTRY[scene].block_recipe(SimpleNamespace(run=SimpleNamespace(fe_degree=degree)), snes_type)
-    load("partial_opening")
+        run = SimpleNamespace(run=SimpleNamespace(fe_degree=degree))
+        return scene_class(scene).block_recipe(run, snes_type)
     assert recipe_of("partial_opening", 1) == {}           # vinewtonrsls: no graph threshold
     ssls = recipe_of("partial_opening", 1, "vinewtonssls")
     assert ssls["vi_fieldsplit_mech_contact_pc_gamg_threshold"] == "0.05"
-    load("inclined_penny")
     order = recipe_of("inclined_penny", 2)
     # Scene 3: the flow and heat fields as one split, before the mechanics
     assert order["vi_groups"] == "flow_heat=pm+pf+Tf+Tm,mech=u+lam+tau"
@@ -266,7 +263,7 @@ def test_a_scene_changes_the_block_recipe():
     direct = {"pc_type": "lu", "snes_atol": "1e-12"}
     assert solver_defaults_by_size(direct, True, 10**6, 50000, order)["snes_atol"] == "1e-9"
     assert solver_defaults_by_size(direct, True, 10, 50000, order)["snes_atol"] == "1e-12"
-    load("penny_impermeable")                            # Scene 2: the same tolerance on the block path
+    # Scene 2: the same tolerance on the block path
 
     def scene2_recipe(degree):
         return recipe_of("penny_impermeable", degree)
@@ -298,7 +295,6 @@ def test_a_scene_changes_the_block_recipe():
     assert amg not in solver_defaults_by_size(direct, True, 10, 50000, scene2)
     # 3D Terzaghi: the p-multigrid's P1 level without aggressive coarsening; Scene 3 keeps PETSc's
     from petthm.compat import GAMG_AGGRESSIVE_LEVELS
-    load("terzaghi")
     assert recipe_of("terzaghi", 2) == {f"vi_fieldsplit_mech_contact_mg_coarse_{GAMG_AGGRESSIVE_LEVELS}": "0"}
     assert recipe_of("terzaghi", 1) == {}                  # P1 u: no p-multigrid, nothing to propose
     assert not any("_mg_coarse_" in k for r in (order, scene2, scene2_recipe(2)) for k in r)
@@ -328,7 +324,7 @@ def test_scene3_flow_and_heat_split_keeps_the_coupling(tmp_path):
     for s in runs.values():
         assert s["steps"] == 2 and s["rejected_steps"] == 0        # the two steps asked for, none rejected
     assert runs["split"]["ksp_iterations"] <= 0.5 * runs["control"]["ksp_iterations"]
-    serial, parallel = (list(csv.DictReader(open(tmp_path / n / "history.csv")))[-1]
+    serial, parallel = ((read_csv(tmp_path / n / "history.csv"))[-1]
                         for n in ("split", "split_2"))
     for key in ("injection_pressure", "production_temperature", "aperture_increase_max", "lam_min"):
         assert float(parallel[key]) == pytest.approx(float(serial[key]), rel=1e-6), key

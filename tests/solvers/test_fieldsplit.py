@@ -1,12 +1,11 @@
 """The block preconditioner (options/solvers/block.opts) and the
 rigid-body near-nullspace of the displacement split (issue 4)."""
 
-import csv
 
 import numpy as np
 import pytest
 
-from conftest import ROOT, build_problem, run_petthm
+from conftest import ROOT, build_problem, read_csv, run_petthm
 
 RECIPE = f"{ROOT}/options/solvers/block.opts"
 
@@ -35,11 +34,11 @@ def test_fieldsplit_recipe_matches_the_direct_solve(tmp_path):
                        "-pc_factor_mat_solver_type", "petsc")
     _, s2 = run_petthm("terzaghi", tmp_path / "split", *opts, "-options_file", RECIPE)
     assert s1["status"] == s2["status"] == "completed"
-    h1 = list(csv.DictReader(open(tmp_path / "direct" / "history.csv")))
-    h2 = list(csv.DictReader(open(tmp_path / "split" / "history.csv")))
+    h1 = (read_csv(tmp_path / "direct" / "history.csv"))
+    h2 = (read_csv(tmp_path / "split" / "history.csv"))
     keys = ("settlement", "p_base", "p_l2_rel")
     worst = max(abs(float(a[k]) - float(b[k])) / max(abs(float(a[k])), 1e-30)
-                for a, b in zip(h1[1:], h2[1:]) for k in keys if a[k] and b[k])
+                for a, b in zip(h1[1:], h2[1:], strict=False) for k in keys if a[k] and b[k])
     print("recipe vs direct", worst, "Krylov", s2["ksp_iterations"], "per step",
           s2["ksp_iterations"] / s2["steps"])
     assert len(h1) == len(h2) and worst <= 1e-7
@@ -57,7 +56,7 @@ def test_vi_fieldsplit_follows_the_active_set(tmp_path):
     for method, ranks in runs:
         out = tmp_path / f"{method}_{ranks}"
         _, s = run_petthm("partial_opening", out, *recipe, "-snes_type", method, ranks=ranks)
-        its = [int(r["snes_its"]) for r in csv.DictReader(open(out / "history.csv"))][1:]
+        its = [int(r["snes_its"]) for r in read_csv(out / "history.csv")][1:]
         print(method, ranks, "Newton", its, "Krylov", s["ksp_iterations"])
         assert s["status"] == "completed" and max(its) <= 15
         assert s["open_length"] == ref["open_length"] and s["nodes_open"] == ref["nodes_open"]
@@ -74,7 +73,7 @@ def scene2_direct(tmp_path_factory):
     """The direct solve's history of the coarse Scene 2 (once for both VI methods)."""
     out = tmp_path_factory.mktemp("scene2_direct")
     run_petthm("penny_impermeable", out, *SCENE2_COARSE)
-    return list(csv.DictReader(open(out / "history.csv")))
+    return (read_csv(out / "history.csv"))
 
 
 @pytest.mark.parametrize("method", ["vinewtonrsls", "vinewtonssls"])
@@ -87,10 +86,11 @@ def test_vi_fieldsplit_scene2(tmp_path, method, scene2_direct):
     _, s = run_petthm("penny_impermeable", out, *SCENE2_COARSE, "-options_file",
                       f"{ROOT}/options/solvers/block.opts", "-snes_type", method)
     h1 = scene2_direct
-    h2 = list(csv.DictReader(open(out / "history.csv")))
+    h2 = (read_csv(out / "history.csv"))
     its = [int(r["snes_its"]) for r in h2[1:]]
     keys = ("injection_pressure", "lam_injector", "aperture_injector", "production_temperature")
-    worst = max(abs(float(a[k]) - float(b[k])) / abs(float(a[k])) for a, b in zip(h1, h2) for k in keys)
+    worst = max(abs(float(a[k]) - float(b[k])) / abs(float(a[k]))
+                for a, b in zip(h1, h2, strict=False) for k in keys)
     print(method, "Newton per step max", max(its), "Krylov", s["ksp_iterations"], "vs direct", worst)
     assert s["status"] == "completed" and len(h1) == len(h2) and max(its) <= 15
     assert worst <= 1e-7
@@ -107,7 +107,7 @@ def test_vi_fieldsplit_contact_patch(tmp_path, method, degree):
     _, s = run_petthm("contact_patch", tmp_path, "-options_file",
                       f"{ROOT}/options/solvers/block.opts", "-thm_fe_degree", degree,
                       "-snes_type", method)
-    its = [int(r["snes_its"]) for r in csv.DictReader(open(tmp_path / "history.csv"))][1:]
+    its = [int(r["snes_its"]) for r in read_csv(tmp_path / "history.csv")][1:]
     print(method, "Newton", its, "Krylov", s["ksp_iterations"], s["error"])
     assert s["status"] == "completed" and max(its) <= 15
     assert s["error"]["lam_error"] <= 1e-6 and s["error"]["opening_max"] <= 1e-9
@@ -128,8 +128,8 @@ def test_vi_fieldsplit_fracture_inflation(tmp_path, method):
     out = tmp_path / method
     _, s = run_petthm("fracture_inflation", out, *common, "-options_file",
                       f"{ROOT}/options/solvers/block.opts")
-    h1 = list(csv.DictReader(open(tmp_path / "direct" / "history.csv")))
-    h2 = list(csv.DictReader(open(out / "history.csv")))
+    h1 = (read_csv(tmp_path / "direct" / "history.csv"))
+    h2 = (read_csv(out / "history.csv"))
     its = [int(r["snes_its"]) for r in h2[1:]]
     p = "injection_pressure"
     dp = abs(float(h1[-1][p]) - float(h2[-1][p])) / float(h1[-1][p])
@@ -152,7 +152,7 @@ def test_vi_fieldsplit_friction_patch(tmp_path, dim, degree, ranks):
     _, s = run_petthm("friction_patch", out, "-options_file", RECIPE, "-thm_friction_dim", dim,
                       "-thm_fe_degree", degree, ranks=ranks)
     e = s["error"]
-    rows = list(csv.DictReader(open(out / "history.csv")))[1:]
+    rows = (read_csv(out / "history.csv"))[1:]
     per = [int(r["ksp_its"]) / max(int(r["snes_its"]), 1) for r in rows]
     print(dim, degree, ranks, "Krylov per Newton", per, e)
     assert s["status"] == "completed" and s["rejected_steps"] == 0 and max(per) <= 40
@@ -163,9 +163,9 @@ def test_vi_fieldsplit_friction_patch(tmp_path, dim, degree, ranks):
     if ranks > 1:                                           # the serial run's history, step by step
         run_petthm("friction_patch", tmp_path / "np1", "-options_file", RECIPE, "-thm_friction_dim", dim,
                    "-thm_fe_degree", degree)
-        serial = list(csv.DictReader(open(tmp_path / "np1" / "history.csv")))[1:]
+        serial = (read_csv(tmp_path / "np1" / "history.csv"))[1:]
         assert len(serial) == len(rows)
-        for a, b in zip(serial, rows):
+        for a, b in zip(serial, rows, strict=False):
             assert abs(float(a["slip_max"]) - float(b["slip_max"])) <= 1e-9 * s["slip_exact_final"]
 
 
@@ -190,7 +190,7 @@ def _schur_terms(tmp_path, monkeypatch, groups):
     from petsc4py import PETSc
 
     from petthm.solvers import fieldsplit
-    opts = dict(zip(SCENE2_COARSE[::2], SCENE2_COARSE[1::2]))
+    opts = dict(zip(SCENE2_COARSE[::2], SCENE2_COARSE[1::2], strict=False))
     problem = build_problem(tmp_path, "penny_impermeable", **{k[1:]: v for k, v in opts.items()})
     J = problem.create_matrix()
     Xdot = problem.X.duplicate()

@@ -14,7 +14,7 @@ def _matrix(n: int, seed: int = 3) -> PETSc.Mat:
     A = PETSc.Mat().createAIJ((n, n), comm=PETSc.COMM_SELF)
     A.setUp()
     rows, cols = np.nonzero(dense)
-    for i, j in zip(rows, cols):
+    for i, j in zip(rows, cols, strict=False):
         A.setValue(int(i), int(j), dense[i, j])
     A.assemble()
     return A

@@ -24,7 +24,7 @@ def test_increasing_root_finds_the_roots_of_tan_x_equals_k_x(k):
     i = np.arange(50)
     lo, hi = np.where(i > 0, i * np.pi + 1e-12, 1e-9), i * np.pi + np.pi / 2 - 1e-12
     roots = increasing_root(f, lo, hi)
-    ref = np.array([brentq(f, a, b) for a, b in zip(lo, hi)])
+    ref = np.array([brentq(f, a, b) for a, b in zip(lo, hi, strict=False)])
     assert np.abs(roots - ref).max() < 3e-12
     # negative control: a bracket with no sign change gives its end, not a root
     assert abs(f(increasing_root(f, [0.5 * np.pi + 0.1], [0.5 * np.pi + 0.2])[0])) > 1.0

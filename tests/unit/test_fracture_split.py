@@ -121,7 +121,8 @@ def _heat_on(path, split):
     from petthm.mesh import fracture as F
     from petthm.mesh.plex import Mesh, distribute, label_boundaries, read_plex
     from petthm.physics.kernels import heat
-    from petthm.solvers.timestepper import SOLVER_DEFAULTS, StepControl, TimeStepper, propose_defaults
+    from petthm.solvers.options import SOLVER_DEFAULTS, Proposals
+    from petthm.solvers.timestepper import StepControl, TimeStepper
     dm = read_plex(str(path), PETSc.COMM_WORLD)
     label_boundaries(dm, {"bottom": lambda x: np.isclose(x[:, 1], 0.0)})
     if split:
@@ -133,7 +134,7 @@ def _heat_on(path, split):
     problem = Problem(disc, model, {"Tm": FieldScale(60.0, 353.15)},
                       [Dirichlet("Tm", "bottom", lambda x, t: np.full(len(x), 293.15))])
     problem.set_initial({"Tm": lambda x: np.full(len(x), 353.15)})
-    propose_defaults(SOLVER_DEFAULTS)
+    Proposals().propose(SOLVER_DEFAULTS)
     problem.auto_residual_scales(0.0, 1.0)
     stepper = TimeStepper(problem, StepControl(final_time=4.0, dt_initial=1.0))
     assert stepper.solve() > 0

@@ -9,7 +9,7 @@ import shutil
 
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, read_text
 
 #: the layers, bottom up; a module's layer is its subpackage's (top-level modules: the base)
 LAYERS = ("base", "mesh", "discretisation", "physics", "solvers", "io", "scenes", "run", "cli")
@@ -47,7 +47,7 @@ def imports(root: str) -> dict[str, set[str]]:
     for name, path in mods.items():
         package = name if path.endswith("__init__.py") else name.rsplit(".", 1)[0]
         found = set()
-        for node in ast.walk(ast.parse(open(path).read())):
+        for node in ast.walk(ast.parse(read_text(path))):
             if isinstance(node, ast.ImportFrom):
                 base = node.module or ""
                 if node.level:

@@ -3,7 +3,7 @@ without bounded unknowns, MUMPS (or SuperLU_dist) otherwise
 (``solver.serial_plane_direct``; measured in docs/performance.md)."""
 import pytest
 
-from petthm.solvers.timestepper import serial_plane_direct
+from petthm.solvers.options import serial_plane_direct
 
 MUMPS = {"ksp_type": "gmres", "ksp_max_it": "50", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 

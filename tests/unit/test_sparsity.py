@@ -36,7 +36,7 @@ def _summed(block, rows, cols, values, size, global_index):
     block.add(v.ravel(), out)
     r, c = np.empty(block.size, compat.INT), np.empty(block.size, compat.INT)
     block.pattern(global_index, r, c)
-    assert len(set(zip(r.tolist(), c.tolist()))) == block.size, "one entry per nonzero"
+    assert len(set(zip(r.tolist(), c.tolist(), strict=False))) == block.size, "one entry per nonzero"
     A = np.zeros((size, size))
     A[r, c] = out
     return A

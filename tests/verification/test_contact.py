@@ -4,7 +4,7 @@ Sneddon's crack openings, the contact patch test and partial opening."""
 import numpy as np
 import pytest
 
-from conftest import build_problem
+from conftest import build_problem, read_csv
 from petthm.verification.jacobian import jacobian_fd_error
 
 SNEDDON_2D = ("-thm_sneddon_dim", 2, "-thm_sneddon_radius", 50, "-thm_sneddon_crack_size", 0.025)
@@ -124,8 +124,7 @@ def test_fracture_inflation_opens_at_the_closure_stress(tmp_path, petthm_run):
     the crack opens; the injected volume equals the change of int a
     (incompressible fluid) to 2e-4."""
     out, s = petthm_run("fracture_inflation", tmp_path)
-    import csv
-    h = list(csv.DictReader(open(tmp_path / "history.csv")))[1:]
+    h = (read_csv(tmp_path / "history.csv"))[1:]
     p = np.array([float(r["injection_pressure"]) for r in h])
     bal = np.array([abs(float(r["volume_balance"])) for r in h])
     print("pressure", p[[0, len(p) // 2, -1]], "volume balance max", bal.max())

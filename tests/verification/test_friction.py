@@ -2,12 +2,11 @@
 friction_patch scene (stick, slip and the step between them; P1/P2, 2D/3D,
 serial = 2 ranks), stiff cases, and friction switched on where the
 reference solution has no shear."""
-import json
 
 import numpy as np
 import pytest
 
-from conftest import build_problem
+from conftest import build_problem, read_csv, read_json
 from petthm.verification.jacobian import jacobian_fd_block_errors
 
 FRICTION_BLOCKS = [("tau", "tau"), ("tau", "lam"), ("tau", "u"), ("u", "tau")]
@@ -50,7 +49,7 @@ def test_friction_jacobian_check_detects_a_missing_block(tmp_path):
 
 
 def _summary(path):
-    return json.load(open(path / "summary.json"))
+    return read_json(path / "summary.json")
 
 
 @pytest.mark.parametrize("dim,degree", [(2, 1), (2, 2), (3, 1), (3, 2)])
@@ -93,11 +92,10 @@ def test_friction_patch_two_ranks_equal_serial(tmp_path, petthm_run):
     """3D P2 on 2 ranks: the same history as the serial run (1e-12 of the slip)."""
     _, s1 = petthm_run("friction_patch", tmp_path / "np1", "-thm_friction_dim", 3)
     _, s2 = petthm_run("friction_patch", tmp_path / "np2", "-thm_friction_dim", 3, ranks=2)
-    import csv
-    h1 = list(csv.DictReader(open(tmp_path / "np1" / "history.csv")))
-    h2 = list(csv.DictReader(open(tmp_path / "np2" / "history.csv")))
+    h1 = (read_csv(tmp_path / "np1" / "history.csv"))
+    h2 = (read_csv(tmp_path / "np2" / "history.csv"))
     assert len(h1) == len(h2)
-    for a, b in zip(h1, h2):
+    for a, b in zip(h1, h2, strict=False):
         assert abs(float(a["slip_max"]) - float(b["slip_max"])) <= 1e-12 * max(s1["slip_exact_final"], 1e-300)
     assert s2["error"]["law_error"] <= 1e-8 and s2["error"]["stick_slip_max"] <= 1e-12
 
@@ -149,7 +147,6 @@ def test_fracture_outputs_carry_slip_and_coulomb(tmp_path, petthm_run):
     the shear traction and the Coulomb function (0 where slipping, < 0
     stuck); history.csv the largest slip and the slipping area (the whole
     100 m2 fracture once it slips)."""
-    import csv
 
     import h5py
     _, s = petthm_run("friction_patch", tmp_path, "-thm_friction_dim", 3, "-thm_fe_degree", 1)
@@ -161,7 +158,7 @@ def test_fracture_outputs_carry_slip_and_coulomb(tmp_path, petthm_run):
     assert {"opening", "slip", "slip_magnitude", "shear_traction", "coulomb", "tau", "lam"} <= names
     assert np.allclose(slip, s["slip_exact_final"], rtol=1e-8)
     assert np.abs(coulomb).max() <= 1e-8 * 0.6 * 60e6
-    h = list(csv.DictReader(open(tmp_path / "history.csv")))
+    h = (read_csv(tmp_path / "history.csv"))
     assert float(h[-1]["slipping_area"]) == pytest.approx(100.0, rel=1e-12)
     assert float(h[1]["slipping_area"]) == 0.0 and float(h[-1]["slip_max"]) == pytest.approx(
         s["slip_exact_final"], rel=1e-8)

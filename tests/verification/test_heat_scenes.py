@@ -1,10 +1,9 @@
 """Verification of the heat scenes: MMS rates, erfc half-space, SUPG bounds."""
-import csv
 
 import numpy as np
 import pytest
 
-from conftest import fitted_slope, run_petthm
+from conftest import fitted_slope, read_csv, run_petthm
 
 MMS_SIZES = {2: [0.25, 0.125, 0.0625, 0.03125], 3: [0.25, 0.125, 0.0625]}
 # acceptance (issue 2): fitted slopes over >= 3 refinements
@@ -38,7 +37,7 @@ def test_heat_erfc_matches_half_space_solution(tmp_path):
     print("heat_erfc max nodal error / (T0 - Ts) at 1e6 s:", err)
     assert err <= 1e-3
     # history: one row per accepted step, with the monitors
-    rows = list(csv.DictReader(open(tmp_path / "history.csv")))
+    rows = (read_csv(tmp_path / "history.csv"))
     assert len(rows) == s["steps"] + 1
     # verification.md 7a at t = 1e6 s: T(z = 1 m) = 47.2725 C (monitor: nearest node to z = 1)
     assert float(rows[-1]["T_z1"]) == pytest.approx(47.2725, abs=0.5)
@@ -51,7 +50,7 @@ def test_supg_keeps_an_advected_front_bounded(tmp_path, degree):
     print(f"heat_advection P{degree}: overshoot {s['overshoot_rel']:.2e} at cell Peclet "
           f"{s['cell_peclet_min']:.0f}")
     assert s["overshoot_rel"] <= 0.01
-    rows = list(csv.DictReader(open(tmp_path / "history.csv")))
+    rows = (read_csv(tmp_path / "history.csv"))
     assert max(float(r["overshoot"]) for r in rows) <= 0.01
     # the front has entered: the inflow temperature is present
     assert float(rows[-1]["T_min"]) < 21.0

@@ -7,14 +7,13 @@ Lauwerier and leakoff references (divisions by q) and divisions by zero in
 the monitors (radial_flow's error over the pressure rise, fracture_inflation's
 volume balance over the injected volume); inclined_penny still cooled the
 rock at the shut injector (Tm = T_inj on its perforation)."""
-import csv
 import math
 import re
 
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_petthm
+from conftest import ROOT, read_csv, run_petthm
 from petthm.io.output import read_output
 
 O = f"{ROOT}/options/scenes"
@@ -61,7 +60,7 @@ def test_zero_injection_rate_is_a_quiet_shut_in(tmp_path, case):
     for name in ("mass_balance", "energy_balance"):    # at rest: not round-off / round-off (it was 1.0)
         value = (summary.get("balance_max") or {}).get(name)
         assert value is None or value <= 1e-4, (name, value)    # Scene 2's contact: 8.6e-6 of balance.REST
-    rows = list(csv.DictReader(open(out / "history.csv")))
+    rows = (read_csv(out / "history.csv"))
     for row in rows:
         bad = {k for k, v in row.items() if k not in NOT_EVALUATED and NOT_A_NUMBER.fullmatch(v.strip())}
         assert not bad, (row["step"], bad)

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, read_text
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from verification_report import STABILITY, stability_row  # noqa: E402
@@ -27,5 +27,5 @@ def test_every_stability_case_is_a_test():
     """The report's cases that name another test point at one that exists."""
     for case in STABILITY:
         path, _, name = case.test.partition("::")
-        text = open(os.path.join(ROOT, path)).read()
+        text = read_text(os.path.join(ROOT, path))
         assert not name or f"def {name}(" in text, case.test

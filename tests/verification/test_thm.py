@@ -38,7 +38,7 @@ def test_scene2_jacobian_blocks_match_finite_differences(tmp_path, degree, excha
     # those rows are linear, so a step of 1 is exact); a wrong block is wrong at every step
     err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=(1e-6, 1e-4, 1e-2, 1.0))
     print(degree, exchange, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
-    assert COUPLINGS <= set(err)
+    assert set(err) >= COUPLINGS
     if exchange == "nusselt":            # hw = Nu lambda_f / (2 a): the rock heat depends on lam and u+-
         assert {("Tm", "lam"), ("Tm", "u"), ("Tf", "Tm"), ("Tm", "Tf")} <= set(err)
     assert max(err.values()) <= 1e-6

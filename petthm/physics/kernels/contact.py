@@ -1,6 +1,6 @@
 """Mechanics of the fracture faces: fluid pressure and contact traction on the
 rock, the frictionless contact constraint and the hydraulic aperture
-(physics.md sections 2 and 3).
+(theory manual, "Equations: rock deformation").
 
 Unknowns: ``u`` (matrix, discontinuous across the fracture: its traces are
 "u-" and "u+") and the contact traction ``lam`` (a fracture field, >= 0,
@@ -23,7 +23,7 @@ to the + face.
   (``fe.tabulate_dual``, the ``FRACTURE_DUAL`` region): the load of lam is
   - int lam_h [[v]] . n with lam_h = sum_k lam_k psi_k, and the residual of
   the ``lam`` row k is the weak opening int psi_k g = D_k g~_k, a nodal
-  quantity (g~ = g at every vertex; docs/contact.md).  SNES's
+  quantity (g~ = g at every vertex; manual, verification: contact).  SNES's
   variational-inequality Newton (``-snes_type vinewtonrsls``) with the bound
   lam >= 0 solves the complementarity: a node either has lam > 0 and
   int mu g = 0 (closed), or lam = 0 and int mu g >= 0 (open).  There is no
@@ -36,9 +36,9 @@ to the + face.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
-from typing import Callable, Optional
 
 import numpy as np
 
@@ -58,9 +58,9 @@ class FractureMechanics:
     """Loads and contact on the fracture faces (see the module docstring)."""
     dim: int
     u: str = "u"
-    lam: Optional[str] = "lam"                 # contact traction field (None: no contact)
-    pf: Optional[str] = None                   # fracture pressure field, or
-    pressure: Optional[Callable] = None        # a prescribed pf(x, t) (SI), x (nc, nq, d)
+    lam: str | None = "lam"                 # contact traction field (None: no contact)
+    pf: str | None = None                   # fracture pressure field, or
+    pressure: Callable | None = None        # a prescribed pf(x, t) (SI), x (nc, nq, d)
     insitu_normal_stress: float = 0.0          # sigma0_nn, tension positive
     insitu_stress: tuple = ()                  # sigma0 (d x d, row by row, tension positive): its shear
                                                # on each face, carried by tau in the in-situ state
@@ -75,7 +75,7 @@ class FractureMechanics:
 
 @dataclass(frozen=True)
 class JointLaw:
-    """Linear joint law ac(lam) = max(a0 - lam/Kn, ares) (physics.md section 3)."""
+    """Linear joint law ac(lam) = max(a0 - lam/Kn, ares) (theory manual, "Contact and friction")."""
     a0: float
     stiffness: float
     residual: float
@@ -172,7 +172,7 @@ def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
     return res, jac
 
 
-# -- the aperture of a deformable fracture (physics.md sections 3, 4 and 7) -------------------
+# -- the aperture of a deformable fracture (theory manual, "Contact and friction") -------------------
 @dataclass(frozen=True)
 class ApertureState:
     """The hydraulic aperture and its derivatives at the quadrature points (nc, nq)."""
@@ -207,7 +207,7 @@ class Aperture:
         gdot = np.einsum("cqa,cqa->cq", ctx.dot(up) - ctx.dot(um), n)
         return ApertureState(ac + H * g, dac, H, dac * ctx.dot(m.lam)[..., 0] + H * gdot)
 
-    def jacobians(self, test, s0: Callable, s1: Optional[Callable], region: Optional[Region] = None) -> list:
+    def jacobians(self, test, s0: Callable, s1: Callable | None, region: Region | None = None) -> list:
         """Blocks d(residual of ``test``)/d(lam, u+, u-) through the aperture.
 
         ``s0(ctx)`` (nc, nq) and ``s1(ctx)`` (nc, nq, d) are the derivatives of

@@ -1,4 +1,4 @@
-"""Fluid flow on one region (matrix cells or fracture faces): physics.md
+"""Fluid flow on one region (matrix cells or fracture faces): the theory manual
 sections 4 and 5 (rigid rock; the Biot term is kernels/poroelastic.py).
 
 The same kernels serve the matrix and the fracture; only the coefficients
@@ -19,9 +19,9 @@ Every Jacobian block is exact (tests check them against finite differences).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Callable, Optional
 
 import numpy as np
 
@@ -37,13 +37,13 @@ class Flow:
     B = a thermal_storage, K = a^3 permeability, and da/dt joins the storage."""
     region: Domain
     p: str                          # pressure field
-    T: Optional[str]                # temperature field of mu(T) and B (None: isothermal)
+    T: str | None                # temperature field of mu(T) and B (None: isothermal)
     storage: float                  # S
     permeability: np.ndarray        # K (d, d)
     viscosity: Viscosity = field(default_factory=Viscosity)
     thermal_storage: float = 0.0    # B
-    aperture: Optional[object] = None
-    source: Optional[Callable] = None   # s(x, t): a volume (area, on the fracture) source, 1/s
+    aperture: object | None = None
+    source: Callable | None = None   # s(x, t): a volume (area, on the fracture) source, 1/s
 
 
 # -- helpers ----------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""Coulomb friction on the fracture faces (physics.md section 3).
+"""Coulomb friction on the fracture faces (theory manual, "Contact and friction").
 
 Unknowns: the tangential traction ``tau`` (a fracture field with d - 1
 components in the tangent basis t_i of each face, ``tangent_basis``), next

@@ -1,4 +1,4 @@
-"""Heat transport on one region (matrix cells or fracture faces): physics.md
+"""Heat transport on one region (matrix cells or fracture faces): the theory manual
 sections 6 and 7, and the wall exchange between fracture and rock.
 
 In conservative form with the fluid's enthalpy flux b T, b = rho_f C_f q
@@ -15,7 +15,7 @@ C T da/dt), and grad is the tangential gradient.  Weak form::
 
 The conservative heat form makes the discrete energy balance exact: with
 w = 1 every flux term cancels, so the stored-energy change equals the
-enthalpy brought in by wells and boundaries (physics.md section 7).  It
+enthalpy brought in by wells and boundaries (theory manual, "Equations: fracture heat").  It
 differs from the advective form of section 7 by T (S pdot - B Tdot), the
 fluid's storage rate times T, which vanishes for an incompressible fluid.
 Where the fluid leaves through a boundary without a temperature condition
@@ -34,7 +34,7 @@ On a deformable fracture the stored energy's C T da/dt and the leakoff's
 enthalpy rho_f C_f q_L T (the tied wall rows) cancel against the da/dt and
 q_L parts of div b, so m leaves out da/dt there.  Without this term (the
 advective form's residual, used before) the scheme is consistent only to
-O(tau T div b) with T in kelvin: the full coupled MMS (docs/coupled_mms.md)
+O(tau T div b) with T in kelvin: the full coupled MMS (manual, verification: coupled MMS)
 measured L2 slope 2 instead of 3 at P2 and a temperature error dominated by
 that term at P1.  What R leaves out on the fracture is lambda_f grad a .
 grad T and, unless -thm_fracture_supg_wall_conduction is on, the rock's wall
@@ -55,9 +55,9 @@ differences with a negative control).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cached_property, partial
-from typing import Callable, Optional
 
 import numpy as np
 
@@ -97,16 +97,16 @@ class Heat:
     capacity: float                 # C
     conductivity: object            # L: a number, or a (d, d) tensor (no advection then)
     fluid_rho_c: float = 0.0        # rho_f C_f (0: no advection)
-    flow: Optional[Flow] = None     # the flow that advects heat, or
-    velocity: Optional[PointFunction] = None   # a prescribed Darcy velocity (m/s)
-    source: Optional[PointFunction] = None     # W/m3
+    flow: Flow | None = None     # the flow that advects heat, or
+    velocity: PointFunction | None = None   # a prescribed Darcy velocity (m/s)
+    source: PointFunction | None = None     # W/m3
     reference_temperature: float = 0.0         # T_ref of the enthalpy flux b (T - T_ref), see below
     degree: int = 2
     supg: bool = True
-    aperture: Optional[object] = None
+    aperture: object | None = None
     lumped: bool = False            # capacity term by row-sum lumping (P1, no aperture)
     biot: tuple = ()                # (u field, alpha): alpha d(div u)/dt in the flow's mass balance (SUPG)
-    wall: Optional[WallConduction] = None      # the rock's wall conduction in R (kernels/wallflux.py)
+    wall: WallConduction | None = None      # the rock's wall conduction in R (kernels/wallflux.py)
 
     @property
     def advects(self) -> bool:
@@ -116,7 +116,7 @@ class Heat:
 @dataclass(frozen=True)
 class ApertureExchange:
     """Wall heat-transfer coefficient hw = K / a of a deformable fracture
-    (physics.md section 7: K = Nu lambda_f / 2)."""
+    (theory manual, "Equations: fracture heat": K = Nu lambda_f / 2)."""
     K: float
     aperture: object
 
@@ -209,7 +209,7 @@ def advective_tau_term(b, ctx, degree: int):
     does not help).  On the thin cells of a layered mesh the longest edge
     overstates the length across the layers 20-40 times: Newton diverged
     at every step length tried where the rock's water crosses the layers
-    (Scene 1 with leakoff, docs/scene1.md), and twice h_b still did.
+    (Scene 1 with leakoff, manual, Scene 1), and twice h_b still did.
     Fracture faces keep h = their longest edge (their cells are isotropic;
     on a line it is the same length)."""
     G = ctx.Jinv                                                   # rows: grad lambda_1..d
@@ -466,7 +466,7 @@ def robin(name: str, boundary: str, h: float, t_ext: PointFunction) -> FacetTerm
 
 # -- wall heat exchange (fracture region) ----------------------------------------------
 def exchange_terms(Tf: str, walls: tuple, hw, lumped: bool = False) -> tuple[list, list]:
-    """q_h = hw (Tf - Tm_s) on each face s (physics.md section 7): a sink in the
+    """q_h = hw (Tf - Tm_s) on each face s (theory manual, "Equations: fracture heat"): a sink in the
     fracture heat equation and the equal source in the matrix heat equation
     (test functions of the ``walls``: the ``Trace`` of Tm on each face).
     ``hw``: a number, or an ``ApertureExchange`` (hw = K/a with the local

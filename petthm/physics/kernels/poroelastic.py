@@ -1,4 +1,4 @@
-"""Thermo-poro-elastic deformation of the matrix (physics.md section 2) and the
+"""Thermo-poro-elastic deformation of the matrix (theory manual, "Equations: rock deformation") and the
 Biot term of the matrix flow equation (section 5).
 
     -div sigma = F,   sigma = C : eps(u) - alpha (p - p0) I - K beta_s (T - T0) I
@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
-from typing import Optional
 
 import numpy as np
 
@@ -34,10 +33,10 @@ class Elastic:
     poisson_ratio: float
     dim: int
     u: str = "u"
-    p: Optional[str] = None           # pore pressure field (Biot coupling)
+    p: str | None = None           # pore pressure field (Biot coupling)
     biot: float = 0.0
     p_ref: float = 0.0
-    T: Optional[str] = None           # temperature field (thermal strain)
+    T: str | None = None           # temperature field (thermal strain)
     thermal_expansion: float = 0.0    # volumetric beta_s
     T_ref: float = 0.0
     body_force: tuple = ()            # F (N/m3), constant: -div sigma = F
@@ -119,9 +118,9 @@ def elastic_terms(el: Elastic) -> tuple[list, list]:
     return res, jac
 
 
-def heating_terms(el: Elastic, T: str, p: Optional[str] = None,
+def heating_terms(el: Elastic, T: str, p: str | None = None,
                   porosity_expansion: float = 0.0) -> tuple[list, list]:
-    """Thermo-mechanical heating of physics.md section 6 in the heat equation of ``T``:
+    """Thermo-mechanical heating of theory manual, "Equations: rock heat" in the heat equation of ``T``:
 
         + beta_s K T d(div u)/dt - phi beta_f T dp/dt
 

@@ -1,7 +1,8 @@
-"""The rock's wall conduction in the fracture heat's SUPG residual (physics.md section 7).
+"""The rock's wall conduction in the fracture heat's SUPG residual (theory
+manual, "Equations: fracture heat").
 
 With the equilibrium exchange (the wall nodes of Tm tied to Tf,
-docs/fracture_th.md) the fracture heat equation in strong form is
+manual, verification: fracture flow and heat) the fracture heat equation in strong form is
 
     C dTf/dt + b . grad Tf - div(a lambda_f grad Tf) - q_w = 0,
     q_w = sum_s d_s . Lambda_m grad Tm_s,
@@ -13,16 +14,16 @@ The Galerkin equations carry q_w without writing it (the tie sums the
 fracture rows and the rock's wall rows), but the SUPG residual R must
 carry it to be consistent: without it R = q_w != 0 at the exact solution,
 an O(tau) error that, in Lauwerier's problem (where q_w is what cools the
-rock), held P2 to P1's accuracy (docs/lauwerier_study.md).
+rock), held P2 to P1's accuracy (manual, verification: Lauwerier study).
 
 ``grad Tm_s`` is that of the rock cell (an ``Adjacent`` field, assembled
 from the rock cell's dofs at the fracture's quadrature points), so the
 Jacobian gains the blocks d(Tf rows)/d(Tm of the two rock cells).  The
 finite exchange (``nusselt``, a given hw) keeps its exchange out of R
-(docs/fracture_th.md explains why) and gets no wall term.  The term is an
+(manual, verification: fracture flow and heat explains why) and gets no wall term.  The term is an
 option (``-thm_fracture_supg_wall_conduction``, ``ModelBuilder.build``):
 where the wall layers are thin against the fracture's cells the consistent
-SUPG over- or undershoots by 1-6 % (measured; docs/fracture_th.md).
+SUPG over- or undershoots by 1-6 % (measured; manual, verification: fracture flow and heat).
 """
 from __future__ import annotations
 

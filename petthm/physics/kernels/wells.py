@@ -1,4 +1,4 @@
-"""Wells on a fracture (physics.md section 9) as terms at one fracture node.
+"""Wells on a fracture (theory manual, "Equations: wells") as terms at one fracture node.
 
 * Injector: volume rate Q (m3/s; per metre out of plane in 2D) into the
   fracture flow equation and the enthalpy rate rho_f C_f Q T_inj into the
