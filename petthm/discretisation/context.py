@@ -78,15 +78,20 @@ class CellContext:
                 np.einsum("cak,qk->cqa", m.J[self._cells], self._asm.rule.points)
         return self._cache["x"]
 
-    def _nodal(self, name, dot=False):
-        key = ("n", name, dot)
+    def _nodal(self, name, dot=False, offset=True):
+        """The field's nodal values on the cells, SI (its rate's with ``dot``);
+        without ``offset``, less the field's constant offset: what a gradient
+        is taken of (the constant has none, and a large offset, an absolute
+        pressure of 1 MPa against changes of 0.1 MPa, would cost the gradient
+        its digits)."""
+        key = ("n", name, dot, offset)
         if key not in self._cache:
             a = self._asm
             f = a.disc.field(name)
             sc = a.scale(name)
             src = self._xdl if dot else self._xl
             v = src[a.dofs(name)[self._cells]] * sc.scale
-            if not dot:
+            if offset and not dot:
                 v = v + sc.offset
             self._cache[key] = v.reshape(v.shape[0], -1, f.ncomp)
         return self._cache[key]
@@ -108,7 +113,7 @@ class CellContext:
         constant over each cell (P1 fields)."""
         key = ("g", name)
         if key not in self._cache:
-            self._cache[key] = self._gradient(name, self._nodal(name))
+            self._cache[key] = self._gradient(name, self._nodal(name, offset=False))
         return self._cache[key]
 
     def grad_dot(self, name):
@@ -139,7 +144,7 @@ class CellContext:
         key = ("l", name)
         if key not in self._cache:
             lapb = self._asm.basis_laplacian(name, self._cells)         # (nc, nb)
-            self._cache[key] = np.einsum("ci,cim->cm", lapb, self._nodal(name))[:, None, :]
+            self._cache[key] = np.einsum("ci,cim->cm", lapb, self._nodal(name, offset=False))[:, None, :]
         return self._cache[key]
 
 
