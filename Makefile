@@ -2,7 +2,7 @@
 PY := .venv/bin/python
 MPI_ENV := OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 
-.PHONY: setup demo test test-slow test-petsc-newest clean
+.PHONY: setup demo test test-slow test-petsc-newest docs clean
 
 setup:
 	@bash scripts/setup_env.sh
@@ -13,6 +13,10 @@ demo: setup
 
 test: setup
 	bash scripts/run_tests.sh
+
+# The manual (Sphinx, MyST Markdown; warnings are errors) into build/docs
+docs: setup
+	$(PY) -m sphinx -W --keep-going -q -b html docs build/docs
 
 test-slow: setup
 	$(MPI_ENV) $(PY) -m pytest -q -m slow

@@ -1,6 +1,6 @@
 """Residual and Jacobian assembly throughput on P2 tetrahedral meshes (1 rank).
 
-    python benchmarks/assembly.py [--cells 1e4 2.5e4 1e5 1e6] [--repeat 5] [--out benchmarks/results]
+    python benchmarks/assembly.py [--cells 1e4 2.5e4 1e5 1e6] [--repeat 5] [--out output/assembly]
                                   [--petsc-c] [--vector-max-cells 2e5]
 
 Operators: the scalar heat operator (mass + conduction) with a constant
@@ -213,7 +213,8 @@ def main():
     ap.add_argument("--petsc-c-vector-max-cells", type=float, default=1.5e4,
                     help="largest mesh for PETSc's ex17 (it takes ~70 s per Jacobian at 1e4 cells)")
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "results"))
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                                  "output", "assembly"))
     ap.add_argument("--operators", nargs="+", default=["heat", "heat_kT", "elasticity"],
                     choices=["heat", "heat_kT", "elasticity"])
     ap.add_argument("--report-from", help="only rewrite assembly.md from this assembly.csv")

@@ -12,7 +12,7 @@ the same with MatSetValuesCOO and MatAssembly into the matrix, and
 ``Problem.local_residual`` at the initial state with a random rate, and each
 region's assembler alone (a full assembly, constant terms included).  Prints medians; ``--profile`` adds a
 cProfile of three evaluations of each.  Run it with OPENBLAS_NUM_THREADS=1
-on a quiet machine and compare two versions side by side (docs/performance.md).
+on a quiet machine and compare two versions side by side (docs/performance/index.md).
 """
 from __future__ import annotations
 

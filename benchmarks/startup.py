@@ -70,7 +70,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--repeat", type=int, default=7)
-    ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "startup"))
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent.parent / "output" / "startup"))
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The test command of the README (make test):
-#   1. the linter (ruff, settings in pyproject.toml) over petthm/, tests/,
-#      scripts/, benchmarks/;
-#   2. the default suite with the set-up environment (.venv);
-#   3. in CI (CI=true) or with PETTHM_TEST_NEWEST=1, the groups of the suite
+#   1. the linter (ruff, settings in pyproject.toml) over everything tracked;
+#   2. the manual (make docs: Sphinx, warnings as errors) into build/docs;
+#   3. the default suite with the set-up environment (.venv);
+#   4. in CI (CI=true) or with PETTHM_TEST_NEWEST=1, the groups of the suite
 #      whose code paths differ between PETSc versions against PETSc 3.26.1 +
 #      petsc4py built from PyPI into a cached virtual environment (~10 min the
 #      first time, then reused): ${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}.
@@ -19,7 +19,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-.venv/bin/python -m ruff check petthm tests scripts benchmarks
+.venv/bin/python -m ruff check .
+start=$(date +%s)
+.venv/bin/python -m sphinx -W --keep-going -q -b html docs build/docs
+echo "== the manual: $(( $(date +%s) - start )) s (build/docs/index.html) =="
 start=$(date +%s)
 .venv/bin/python -m pytest -q "$@"
 echo "== default suite: $(( $(date +%s) - start )) s =="

@@ -1,7 +1,7 @@
 """Scene 1 of the paper (``rigid_fracture``): the matrix-permeability sweep
 and its figures (paper Figs. 2 and 3).
 
-    python scripts/scene1_sweep.py [--out benchmarks/results/scene1] [--jobs 2] [--plot-only] [-- OPTIONS]
+    python scripts/scene1_sweep.py [--out output/scene1] [--jobs 2] [--plot-only] [-- OPTIONS]
 
 Runs ``python -m petthm rigid_fracture`` for k = 0, 1e-16 ... 1e-12 m2 with
 permeability normal to the fracture only ("1D leakoff", -thm_rock_permeability 0,k)
@@ -96,7 +96,7 @@ def plots(out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "scene1"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "output", "scene1"))
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--cases", default=",".join(c for c, _ in CASES), help="subset of the cases")

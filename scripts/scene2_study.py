@@ -2,7 +2,7 @@
 paper's Figs. 5 and 6, and a sensitivity study (mesh, layers, domain size,
 heat exchange mode, time step, traction at the front).
 
-    python scripts/scene2_study.py [--out benchmarks/results/scene2] [--jobs 1] [--cases a,b] [--plot-only]
+    python scripts/scene2_study.py [--out output/scene2] [--jobs 1] [--cases a,b] [--plot-only]
 
 Each case runs ``python -m petthm penny_impermeable -options_file
 options/scenes/penny_impermeable.opts`` with its own options, then this
@@ -148,7 +148,7 @@ def demo(out, extra):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "scene2"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "output", "scene2"))
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--cases", default=",".join(CASES), help="subset of: " + ",".join(CASES))

@@ -284,7 +284,7 @@ def main():
         a.out = a.out or os.path.join(ROOT, "output", "demo")
         print("Scene 3 of Salimzadeh et al. (2018), coarse: the three cases to 30 years, at once ...",
               flush=True)
-    out = a.out or os.path.join(ROOT, "benchmarks", "results", f"scene3_{a.variant}")
+    out = a.out or os.path.join(ROOT, "output", f"scene3_{a.variant}")
     try:
         cases = [int(c) for c in a.cases.split(",") if c]
     except ValueError:

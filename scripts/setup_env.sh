@@ -33,7 +33,7 @@ PY
 }
 
 if [ -x "$VENV/bin/python" ] && has_petsc4py "$VENV/bin/python" && ! old_numpy "$VENV/bin/python" \
-   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, mpi4py, ruff, iapws" 2>/dev/null; then
+   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, mpi4py, ruff, iapws, sphinx, myst_parser, pydata_sphinx_theme" 2>/dev/null; then
   exit 0
 fi
 
@@ -56,12 +56,13 @@ else
 fi
 PIP="$VENV/bin/python -m pip"
 need=""
-for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pytest mpi4py:mpi4py ruff:ruff iapws:iapws; do
+for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pytest mpi4py:mpi4py ruff:ruff iapws:iapws \
+           sphinx:sphinx myst_parser:myst-parser pydata_sphinx_theme:pydata-sphinx-theme; do
   "$VENV/bin/python" -c "import ${mod%%:*}" 2>/dev/null || need="$need ${mod#*:}"
 done
 [ -z "$need" ] || $PIP install -q $need
 # numpy 1.25+ sorts int64 with SIMD (AVX-512), which the Jacobian's pattern uses
-# (petthm/discretisation/radix.py, docs/performance.md); within 1.x, so that the system's
+# (petthm/discretisation/radix.py, docs/performance/index.md); within 1.x, so that the system's
 # petsc4py, scipy and h5py (built against an older 1.x) keep working
 if old_numpy "$VENV/bin/python"; then $PIP install -q --no-warn-conflicts "numpy>=1.25,<2"; fi
 $PIP install -q --no-deps --no-build-isolation -e .

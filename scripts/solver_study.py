@@ -93,7 +93,7 @@ def main(argv=None) -> int:
     ap.add_argument("--common", default="")
     ap.add_argument("--out", default="")
     a = ap.parse_args(argv)
-    out = a.out or os.path.join(ROOT, "benchmarks", "results", f"solver_study_{a.scene}")
+    out = a.out or os.path.join(ROOT, "output", f"solver_study_{a.scene}")
     levels = [lv.strip() for lv in a.levels.split(";")] if a.levels else [""]
     solvers = [s.partition("=")[::2] for s in a.solvers.split(";") if s.strip()]
     rows = []

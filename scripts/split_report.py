@@ -1,4 +1,4 @@
-"""Cohesive split statistics of a gmsh mesh (docs/fracture.md):
+"""Cohesive split statistics of a gmsh mesh (docs/verification/fracture-flow-and-heat.md):
 
     [mpiexec -n N] python scripts/split_report.py MESH.msh
 

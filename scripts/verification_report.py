@@ -1,9 +1,9 @@
 """The verification and stability report (issue 16 item 6): every
 verification case at three resolutions, and the stiff and extreme cases.
 
-    python scripts/verification_report.py [--out benchmarks/results/verification_report]
+    python scripts/verification_report.py [--out output/verification_report]
                                           [--cases NAME,NAME] [--stability-only | --convergence-only]
-                                          [--jobs 1] [--doc docs/verification_report.md]
+                                          [--jobs 1] [--doc docs/verification/report.md]
 
 Convergence: each case runs at levels 0, 1, 2, every mesh size of the case
 halved from one level to the next (its other options fixed); the table has,
@@ -68,14 +68,14 @@ def _coupled(degree, state, supg, size):
     return Case(f"coupled MMS 2D P{degree} {state}{' SUPG' if supg else ''}", "coupled_mms",
                 ("-thm_fe_degree", degree, "-thm_coupled_mms_state", state, "-thm_coupled_mms_supg", supg,
                  "-thm_direct_max_unknowns", 1000000), {"-thm_mesh_size": size}, rates,
-                "u, pm, Tm, pf, Tf, lam with a fracture (docs/coupled_mms.md)")
+                "u, pm, Tm, pf, Tf, lam with a fracture (docs/verification/coupled-mms.md)")
 
 
 CONVERGENCE = [
     _mms(2, 1, 0.1), _mms(2, 2, 0.2), _mms(3, 1, 0.25),
     _coupled(1, "open", 1, 0.125), _coupled(2, "closed", 0, 0.25),
     Case("heat erfc (half-space)", "heat_erfc", (), {"-thm_erfc_surface_size": 0.04},
-         (("Tm_max_rel", None),), "conduction after a surface step (verification.md 7a); the time steps set "
+         (("Tm_max_rel", None),), "conduction after a surface step (Carslaw & Jaeger); the time steps set "
          "the error (the same on every mesh)"),
     Case("fracture flow patch", "fracture_flow_patch", (), {"-thm_mesh_size": 40.0},
          (("pf_max_rel", "exact"), ("flux_rel", "exact")), "linear pressure along a fracture"),
@@ -90,7 +90,8 @@ CONVERGENCE = [
          "below 0.2 % the time error sets the error"),
     Case("Lauwerier", "lauwerier", (), {"-thm_lauwerier_fracture_size": 2.0},
          (("outlet_max_rel_t_ge_1e4", None), ("profile_max_rel_t1e+07", None)),
-         "outlet and profile against Lauwerier (1); the time steps fixed (docs/lauwerier_study.md)"),
+         "outlet and profile against Lauwerier (1); the time steps fixed "
+         "(docs/verification/lauwerier-study.md)"),
     Case("Sneddon 2D (Griffith crack)", "sneddon", ("-thm_sneddon_dim", 2),
          {"-thm_sneddon_crack_size": 0.1}, (("centre_error", None), ("opening_l2_error", None)),
          "opening of a pressurised crack (4); the finite box (20 c) and the tip singularity limit the "
@@ -133,7 +134,8 @@ class Stability:
 
 _SCENE3_TEST = "tests/verification/test_scene3.py::test_scene3_stiff_and_extreme_cases"
 _JOINT_TEST = "tests/verification/test_contact.py::test_contact_patch_joint_stiffness"
-#: the coarse Scene 3 mesh lets Tf leave [Tinj, T0] by 1-2 % of the range in its first days (docs/scene3.md)
+#: the coarse Scene 3 mesh lets Tf leave [Tinj, T0] by 1-2 % of the range in its first days
+#: (docs/paper/scene3.md)
 _SCENE3_BOUNDS = None
 _COARSE3 = ("-options_file", "options/scenes/inclined_penny_coarse.opts", "-thm_fe_degree", 1,
             "-thm_final_time", 3 * 86400)
@@ -398,8 +400,8 @@ def kept_convergence_section(doc: str) -> list[str]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "verification_report"))
-    ap.add_argument("--doc", default=os.path.join(ROOT, "docs", "verification_report.md"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "output", "verification_report"))
+    ap.add_argument("--doc", default=os.path.join(ROOT, "docs", "verification", "report.md"))
     ap.add_argument("--cases", default="", help="names (or parts of names) of the cases to run")
     ap.add_argument("--reuse", action="store_true",
                     help="take the runs whose folder in --out/runs has a summary.json from there")
@@ -424,7 +426,8 @@ def main() -> int:
             stab_rows = list(ex.map(lambda c: stability_row(c, a.out), stab))
     if conv_rows:
         _write_csv(os.path.join(a.out, "convergence.csv"), conv_rows)
-        plot(cases, conv_rows, os.path.join(a.out, "verification_work_precision.png"))
+        plot(cases, conv_rows, os.path.join(os.path.dirname(os.path.abspath(a.doc)) if a.doc else a.out,
+                                            "verification-work-precision.png"))
     if stab_rows:
         _write_csv(os.path.join(a.out, "stability.csv"), stab_rows)
     lines = ["# Verification and stability report", "",
@@ -439,7 +442,7 @@ def main() -> int:
     if conv_rows:
         lines += ["## Convergence", "", *convergence_markdown(cases, conv_rows), "",
                   *[f"* {c.name}: {c.note}." for c in cases if c.note], "",
-                  "![work-precision](../benchmarks/results/verification_report/verification_work_precision.png)",
+                  "![work-precision](verification-work-precision.png)",
                   ""]
     elif a.stability_only and not pick:
         lines += kept_convergence_section(a.doc)

@@ -2,7 +2,7 @@
 """Peer benchmark (issue 16, item 5): petthm against OpenGeoSys 6.5.9 on the
 Lauwerier case, error against wall time, both codes in the same invocation.
 
-    python benchmarks/peer_ogs/run_peer_ogs.py [--out benchmarks/peer_ogs/results]
+    python benchmarks/peer_ogs/run_peer_ogs.py [--out output/peer_ogs]
         [--ogs-levels 1,2,3] [--petthm-levels 0,1,2] [--repeat 1]
         [--petthm-root .] [--venv ~/.cache/petthm/venv-ogs] [--work DIR]
 
@@ -505,7 +505,7 @@ def plot(rows, path: Path, t_end: float):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--out", default=str(ROOT / "output" / "peer_ogs"))
     ap.add_argument("--work", default=None, help="run directories (default: OUT/runs)")
     ap.add_argument("--ogs-levels", default="1,2,3")
     ap.add_argument("--petthm-levels", default="0,1,2",
@@ -517,7 +517,7 @@ def main(argv=None):
     ap.add_argument("--stabilization", default="none", choices=("none", "FullUpwind"),
                     help="OGS's numerical stabilization of the heat advection (FullUpwind gives outlet "
                     "temperatures far above 100 degC on this mixed-dimensional mesh in 6.5.9: "
-                    "docs/peer_ogs.md)")
+                    "docs/verification/peer-ogs.md)")
     ap.add_argument("--ogs-solvers", default="SparseLU",
                     help="OGS's linear solvers, comma-separated, each run at every OGS level: "
                     + ", ".join(LINEAR_SOLVERS) + " (Eigen SparseLU; BiCGSTAB with ILUT)")

@@ -1,4 +1,4 @@
-"""Disk and rank faults (docs/reliability.md, "Disk and ranks"): no space
+"""Disk and rank faults (docs/user-guide/reliability.md, "Disk and ranks"): no space
 left at the start or in the middle of a run is a one-line error with exit
 code 1 and the last checkpoint intact; after space is freed the restart
 completes equal to the uninterrupted run; a kill -9 in the middle of a

@@ -1,4 +1,4 @@
-"""A strict command line and physically possible inputs (docs/reliability.md,
+"""A strict command line and physically possible inputs (docs/user-guide/reliability.md,
 "Command line" and "Inputs"): a stray word, a second value or a list where a
 number is expected is an error naming it; an options file gets the same
 rules with its file and line; water must be liquid (IAPWS-IF97 region 1);

@@ -1,4 +1,4 @@
-"""The output folder (docs/reliability.md, "Output folder"): a run never
+"""The output folder (docs/user-guide/reliability.md, "Output folder"): a run never
 replaces another run's output unless asked (-thm_overwrite), and then only
 the files of that run's manifest; a folder in use is locked; a run refused
 for its input leaves the folder as it found it."""

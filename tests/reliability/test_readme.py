@@ -1,4 +1,4 @@
-"""A newcomer's first minutes (docs/reliability.md, "Newcomer"): the
+"""A newcomer's first minutes (docs/user-guide/reliability.md, "Newcomer"): the
 README's commands after ``make demo``, copied as written into a fresh
 shell (the activation line, then the "Running" block), and every
 verification scene's errors against its reference printed at the end."""

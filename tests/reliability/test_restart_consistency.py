@@ -1,4 +1,4 @@
-"""What a restart continues (docs/reliability.md, "Restart"): the same
+"""What a restart continues (docs/user-guide/reliability.md, "Restart"): the same
 problem (physics, mesh and discretisation options and the mesh file kept;
 solver, output and run-control options and a later end time may change),
 a completed run is left as it is, a restarted run's summary reports the

@@ -1,4 +1,4 @@
-"""Status words and exit codes (physics.md section 12, docs/reliability.md
+"""Status words and exit codes (physics.md section 12, docs/user-guide/reliability.md
 "Status"): 0 completed, 1 failed, 2 input error, 3 interrupted by a signal
 or stopped by -thm_max_wall (continued with -thm_restart), 4 stopped by
 -ts_max_steps (a limit the user set)."""

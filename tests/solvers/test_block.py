@@ -54,7 +54,7 @@ def test_contact_glue_gives_the_fracture_storage(tmp_path):
     the pf block is singular: the same LU meets a zero pivot and the first
     step cannot be solved.  (With GAMG on the singular block the control
     failed too while FGMRES's Gram-Schmidt was not re-orthogonalised; with
-    ``refine_ifneeded``, stop 38, FGMRES gets past it: docs/solvers.md.)"""
+    ``refine_ifneeded``, stop 38, FGMRES gets past it: docs/solvers/index.md.)"""
     common = ("-options_file", f"{ROOT}/options/scenes/fracture_inflation.opts", *BLOCK,
               "-thm_fe_degree", 1)
     _, s = run_petthm("fracture_inflation", tmp_path / "glue", *common)
@@ -306,7 +306,7 @@ def test_scene3_flow_and_heat_split_keeps_the_coupling(tmp_path):
     (``Scene.block_recipe``): {pm, pf, Tf, Tm} as one split before the
     mechanics needs clearly fewer Krylov iterations than the five splits of
     stop 34's order, each by its AMG cycle (the control, which drops the
-    coupling among the flow and heat fields; docs/solvers.md, stop 40).
+    coupling among the flow and heat fields; docs/solvers/index.md, stop 40).
     Two ranks (block Jacobi with ILU(0) per rank in the one split) give the
     serial state."""
     common = ("-options_file", f"{ROOT}/options/scenes/inclined_penny_coarse.opts", "-thm_scene3_case", 2,
@@ -335,7 +335,7 @@ def test_coupled_mms_takes_the_flow_and_heat_split(tmp_path):
     the block path takes Scene 3's recipe (``CoupledMMS.block_recipe``):
     few Krylov iterations per Newton iteration.  The control, BLOCK_RECIPE's
     five splits each by its AMG cycle, needs many times more (at 60 k
-    unknowns every linear solve stopped at 500 iterations; docs/solvers.md,
+    unknowns every linear solve stopped at 500 iterations; docs/solvers/index.md,
     stop 45)."""
     from petthm.solvers.recipes import BLOCK_RECIPE
     common = ("-thm_coupled_mms_dim", 3, "-thm_fe_degree", 1, "-thm_coupled_mms_supg", 1,
@@ -382,7 +382,7 @@ def test_scene2_p2_recipe_holds_the_count_at_long_steps(tmp_path):
     aggressive coarsening, eight CG iterations; ``-vi_contact_schur off``)
     against the recipe before them (the negative control).  Measured: 221
     against 428 Krylov iterations in 28 Newton iterations each, the same
-    steps; ~200 s a run (docs/solvers.md, stop 42)."""
+    steps; ~200 s a run (docs/solvers/index.md, stop 42)."""
     from petsc4py import PETSc
     if not PETSc.Sys.hasExternalPackage("hypre"):
         pytest.skip("PETSc without hypre: Scene 2's P2 recipe keeps the p-multigrid")

@@ -144,7 +144,7 @@ def test_vi_fieldsplit_fracture_inflation(tmp_path, method):
 def test_vi_fieldsplit_friction_patch(tmp_path, dim, degree, ranks):
     """friction_patch (u, lam, tau; stick, then the whole fracture slips)
     with the block recipe: the sticking nodes' tau rows glue the tangential
-    jump, the slipping ones are eliminated (docs/solvers.md).  The
+    jump, the slipping ones are eliminated (docs/solvers/index.md).  The
     criteria of the direct solve (tests/verification/test_friction.py),
     with lam to 1e-9 (the Krylov solve stops at 1e-10), no rejected step,
     <= 40 Krylov per Newton (measured 10-21); 2 ranks as 1."""

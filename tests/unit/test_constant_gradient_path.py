@@ -1,6 +1,6 @@
 """The Jacobian's gradient terms of P1 functions summed over the cell first
 (``Assembler._constant_gradient_terms``) against the reference-tensor path
-that integrates every term point by point (docs/performance.md, "P1
+that integrates every term point by point (docs/performance/index.md, "P1
 gradient terms summed over the cell")."""
 import numpy as np
 import pytest

@@ -1,6 +1,6 @@
 """The direct solve petthm proposes: PETSc's own LU for serial 2D runs
 without bounded unknowns, MUMPS (or SuperLU_dist) otherwise
-(``solver.serial_plane_direct``; measured in docs/performance.md)."""
+(``solver.serial_plane_direct``; measured in docs/performance/index.md)."""
 import pytest
 
 from petthm.solvers.options import serial_plane_direct

@@ -1,6 +1,6 @@
 """One BLAS thread per rank under an MPI launcher, unless the user asks for
 more; a serial run keeps the library's threads (petthm/__init__.py,
-docs/performance.md "BLAS threads")."""
+docs/performance/index.md "BLAS threads")."""
 import ctypes.util
 import os
 import subprocess

@@ -1,6 +1,6 @@
 """The full coupled manufactured solution (coupled_mms, verification.md section 8):
 every field of Scene 3 at once.  The 2D cases run here, and one 3D pair (the
-closed aperture's order); the 3D rates are in scripts/coupled_mms_study.py
+closed aperture's order); the 3D rates are in benchmarks/studies/coupled_mms_study.py
 (benchmarks/results/coupled_mms*)."""
 import dataclasses
 
@@ -33,7 +33,7 @@ def _rates(tmp_path, sizes, *opts):
 def test_coupled_mms_rates(tmp_path, degree, state, supg, sizes):
     """Optimal rates of every field.  P2 with SUPG needs the rock's wall
     conduction in the fracture's SUPG residual (-thm_fracture_supg_wall_conduction):
-    without it Tf and Tm stop at L2 slope 2.2 (docs/coupled_mms.md, point 3)."""
+    without it Tf and Tm stop at L2 slope 2.2 (docs/verification/coupled-mms.md, point 3)."""
     wall = ("-thm_fracture_supg_wall_conduction", "true") if supg == "wall" else ()
     hs, err = _rates(tmp_path, sizes, "-thm_coupled_mms_dim", 2, "-thm_fe_degree", degree,
                      "-thm_coupled_mms_state", state, "-thm_coupled_mms_supg", int(bool(supg)), *wall)
@@ -61,7 +61,7 @@ def test_the_closed_fractures_fields_converge_at_the_order_of_its_aperture(tmp_p
     capacity.  With the manufactured joint soft (Kn = 2: lam moves a by up to
     half of a0) pf and Tf converge at lam's order; with it stiff (Kn = 200,
     the same solution otherwise) at the optimal order 3.  Two meshes
-    (h 0.50 -> 0.25; docs/coupled_mms.md, "The closed fracture's aperture"
+    (h 0.50 -> 0.25; docs/verification/coupled-mms.md, "The closed fracture's aperture"
     for three: pf 3.19, Tf 3.50 against 2.00, 1.83)."""
     def slopes(kn):
         hs, err = _rates(tmp_path / f"kn{kn}", (0.25, 0.125), "-thm_coupled_mms_dim", 3, "-thm_fe_degree", 2,

@@ -212,7 +212,7 @@ def test_scene1_more_leakoff_gives_hotter_production_for_longer(tmp_path):
     temperature increases with the matrix permeability (1D leakoff: the fluid
     in the fracture slows down), and at 1e8 s the isotropic case at 1e-13 m2
     is hotter than its 1D counterpart.  (At 1e8 s the 1D cases are colder
-    than the impermeable one: docs/scene1.md.)"""
+    than the impermeable one: docs/paper/scene1.md.)"""
     coarse = ("-thm_fe_degree", 1, "-thm_final_time", 1e8, "-thm_mesh_size", 50, "-thm_scene1_fracture_size",
               2)
     T6, T8 = {}, {}

@@ -68,7 +68,7 @@ def test_scene2_coarse_run(tmp_path, petthm_run):
     traction at the injector and raises its aperture; the fracture stays
     closed with a = a0 - lam/Kn at every closed vertex; mass and energy
     balance (energy to O(da dT) per step: the product rule of d(a T)/dt
-    under backward Euler, docs/scene2.md)."""
+    under backward Euler, docs/paper/scene2.md)."""
     _, s = petthm_run("penny_impermeable", tmp_path, *LAYERED, "-thm_final_time", 1e6)
     h = _history(tmp_path)
     lam = np.array([float(r["lam_injector"]) for r in h])
