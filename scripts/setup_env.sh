@@ -60,7 +60,10 @@ for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pyte
            sphinx:sphinx myst_parser:myst-parser pydata_sphinx_theme:pydata-sphinx-theme; do
   "$VENV/bin/python" -c "import ${mod%%:*}" 2>/dev/null || need="$need ${mod#*:}"
 done
-[ -z "$need" ] || $PIP install -q $need
+# the environment sees the system's packages (Debian's petsc4py); the manual's tools may need
+# newer versions (markdown-it-py, docutils) than unrelated system packages declare (rich,
+# awscli), which petthm does not use: pip is told not to warn about those
+[ -z "$need" ] || $PIP install -q --no-warn-conflicts $need
 # numpy 1.25+ sorts int64 with SIMD (AVX-512), which the Jacobian's pattern uses
 # (petthm/discretisation/radix.py, docs/performance/index.md); within 1.x, so that the system's
 # petsc4py, scipy and h5py (built against an older 1.x) keep working
