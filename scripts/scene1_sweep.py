@@ -75,7 +75,7 @@ def plots(out):
                      "leakoff_fraction_1e8": round(at(h, 1e8, "leakoff_fraction"), 4),
                      "mass_balance_max": s["balance_max"]["mass_balance"],
                      "energy_balance_max": s["balance_max"]["energy_balance"],
-                     "Tf_bounds_violation": s["balance_max"]["Tf_bounds_violation"],
+                     "Tf_bounds_violation": s["bounds"]["Tf"]["violation_fraction"],
                      "steps": s["steps"], "wall_s": round(s["wall_time"]["total"], 1)})
     ax.set_xlabel("time (s)")
     ax.set_ylabel("production temperature (degC)")

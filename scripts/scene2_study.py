@@ -66,7 +66,7 @@ def row(name, d):
             "aperture_identity": s["balance_max"]["aperture_identity"],
             "mass_balance_max": s["balance_max"]["mass_balance"],
             "energy_balance_max": s["balance_max"]["energy_balance"],
-            "Tf_bounds_violation": s["balance_max"]["Tf_bounds_violation"],
+            "Tf_bounds_violation": s["bounds"]["Tf"]["violation_fraction"],
             "steps": s["steps"], "rejected": s["rejected_steps"], "newton": s["snes_iterations"],
             "wall_s": round(s["wall_time"]["total"], 1)}
 

@@ -77,7 +77,9 @@ def row(case, d) -> dict:
             "aperture_identity": bal.get("aperture_identity", float("nan")),
             "mass_balance": bal.get("mass_balance", float("nan")),
             "energy_balance": bal.get("energy_balance", float("nan")),
-            "Tf_bounds_violation": bal.get("Tf_bounds_violation", float("nan")),
+            **{f"{f}_{k}": (s.get("bounds") or {}).get(f, {}).get(key, float("nan"))
+               for f in ("Tf", "Tm") for k, key in (("below_K", "below"), ("above_K", "above"),
+                                                    ("bounds_violation", "violation_fraction"))},
             "cells": s["cells"], "steps": s["steps"], "rejected": s["rejected_steps"],
             "wall_s": round(s["wall_time"]["total"], 1), "status": s["status"]}
 
@@ -248,7 +250,9 @@ COLUMNS = [("case", "case", ""), ("T0 (degC)", "T0_degC", ""), ("lam0 (MPa)", "l
            ("raised area 30 y (m2)", "raised_area_30y_m2", ""), ("p inj 30 y (MPa)", "p_inj_30y_MPa", ""),
            ("lam min 30 y (MPa)", "lam_min_30y_MPa", ""), ("a(lam) identity", "aperture_identity", ".1e"),
            ("mass bal.", "mass_balance", ".1e"), ("energy bal.", "energy_balance", ".1e"),
-           ("Tf bound viol.", "Tf_bounds_violation", ".2f"), ("cells", "cells", ""), ("steps", "steps", ""),
+           ("Tf below Tinj (K)", "Tf_below_K", ".2f"), ("Tf above T0 (K)", "Tf_above_K", ".2f"),
+           ("Tm below Tinj (K)", "Tm_below_K", ".2f"), ("Tm above T0 (K)", "Tm_above_K", ".2f"),
+           ("cells", "cells", ""), ("steps", "steps", ""),
            ("wall (s)", "wall_s", ""), ("status", "status", "")]
 
 

@@ -147,6 +147,22 @@ class NodeOutputs:
     fields: Callable
 
 
+@dataclass(frozen=True)
+class Range:
+    """The interval a field's nodal values belong in (SI; None: no bound
+    there), reported every step: the field's minimum and maximum in the
+    history, the largest excursion in the summary; with ``warn_above``
+    (a fraction of ``upper - lower``) a one-time warning with ``hint``."""
+    lower: float | None = None
+    upper: float | None = None
+    warn_above: float | None = None
+    hint: str = ""
+
+    @property
+    def bounded(self) -> bool:
+        return self.lower is not None and self.upper is not None
+
+
 @dataclass
 class Model:
     """The active fields and every term, each on its region.  ``bounds``
@@ -164,6 +180,8 @@ class Model:
     aperture_law: ApertureLaw | None = None   # a deformable fracture's a(lam, g) (outputs, monitors)
     friction_law: FrictionLaw | None = None   # the Coulomb bound with friction (outputs, monitors)
     outputs: list[NodeOutputs] = field(default_factory=list)
+    #: fields whose range every step reports, with the interval they belong in
+    ranges: dict[str, Range] = field(default_factory=dict)
     #: checks of the mesh a term is accurate on: ``check(mesh)`` returns a warning, or None
     mesh_checks: list[Callable] = field(default_factory=list)
 

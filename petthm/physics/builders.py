@@ -27,13 +27,23 @@ term is one kernel (``petthm/physics/kernels``) and one builder here.
 """
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
 
 from petthm.discretisation.fields import FieldSpec
-from petthm.discretisation.model import FRACTURE, FRACTURE_DUAL, Domain, Model, NodeOutputs, PointTerm, traces
+from petthm.discretisation.model import (
+    FRACTURE,
+    FRACTURE_DUAL,
+    Domain,
+    Model,
+    NodeOutputs,
+    PointTerm,
+    Range,
+    traces,
+)
 from petthm.errors import InputError
 from petthm.params import CELSIUS
 from petthm.physics.kernels import contact as ct
@@ -67,7 +77,7 @@ def thin_wall_layers(mesh) -> str | None:
         return None
     return (f"-thm_fracture_supg_wall_conduction on rock layers {ratio:.3g} times as thick as the "
             f"fracture's cells (< {THIN_WALL_LAYER:g}): Tf left [Tinj, T0] by up to 6 % on meshes with such "
-            "layers; check Tf_bounds_violation")
+            "layers; check bounds.Tf in summary.json")
 
 
 #: temperatures are kelvin inside and degrees Celsius in every output
@@ -284,4 +294,22 @@ class ModelBuilder:
         if self.elastic is not None and self.elastic.p is not None and m.has(self.elastic.p):
             m.preconditioner += pe.fixed_stress_terms(self.elastic, self.elastic.p)
         m.fields.sort(key=lambda f: FIELD_ORDER.index(f.name))
+        for name, r in self.temperature_ranges().items():
+            m.ranges.setdefault(name, r)
         return m
+
+    def temperature_ranges(self) -> dict[str, Range]:
+        """Each temperature field's range: between the lowest and the highest
+        temperature the scene gives (initial, injection, boundary; theory
+        manual, "Discrete bounds"), where no heat source acts; a field with a
+        source (the manufactured solutions) has its range reported without
+        bounds."""
+        given = [getattr(self.p, f.name) + CELSIUS for f in dataclasses.fields(self.p)
+                 if f.metadata.get("unit") == "degC"]
+        out = {}
+        for h in self.heats.values():
+            if h.source is not None or not given:
+                out[h.T] = Range()
+            else:
+                out[h.T] = Range(min(given), max(given))
+        return out

@@ -7,7 +7,6 @@ attributes, so that a scene's ``Monitor`` composes them.
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -151,31 +150,6 @@ class Balances:
     def last_residual(self):
         """The scaled local residual of the last step (for reactions), or None."""
         return None if self.monitor is None else self.monitor.last_residual
-
-
-# -- bounds ------------------------------------------------------------------------------------
-class TemperatureRange:
-    """``<field>_min`` and ``<field>_max`` (degC) every step and the worst
-    violation of [lo, hi] relative to hi - lo (``<field>_bounds_violation``);
-    with ``warn_above``, a one-time warning on rank 0 when it is exceeded."""
-
-    def __init__(self, name: str, lo: float, hi: float, worst: Worst, warn_above: float | None = None,
-                 hint: str = ""):
-        self.name, self.worst, self.warn_above, self.hint = name, worst, warn_above, hint
-        self.lo, self.hi = sorted((lo, hi))
-        self.warned = False
-
-    def __call__(self, problem, t, X=None) -> dict:
-        tmin, tmax = probes.field_range(problem, self.name, X, t, offset=CELSIUS)
-        viol = max(0.0, self.lo - tmin, tmax - self.hi) / max(self.hi - self.lo, 1e-300)
-        self.worst.update(f"{self.name}_bounds_violation", viol)
-        if self.warn_above is not None and viol > self.warn_above and not self.warned:
-            self.warned = True
-            if problem.dm.comm.rank == 0:
-                print(f"warning: at t = {t:.4g} s {self.name} = [{tmin:.2f}, {tmax:.2f}] degC leaves "
-                      f"[{self.lo:g}, {self.hi:g}] by {100 * viol:.0f} % of the range (max in summary.json: "
-                      f"{self.name}_bounds_violation){self.hint}", file=sys.stderr, flush=True)
-        return {f"{self.name}_min": tmin, f"{self.name}_max": tmax}
 
 
 def hit(t: float, times) -> float | None:

@@ -38,6 +38,7 @@ from petthm.mesh.plex import (
 )
 from petthm.run.continuation import Continuation, end_time, option_record
 from petthm.run.provenance import git_commit, options_in_effect, peak_memory_mb, solver_costs
+from petthm.run.ranges import FieldRanges, WithRanges
 from petthm.run.stepreport import StepReport
 from petthm.scenes import MODULES, scene_class
 from petthm.solvers.options import Proposals, proposed_options
@@ -242,8 +243,8 @@ class Run:
                                                 self.comm.size, problem.X.getSize(), control, self.comm))
         self._pop("setup", st, t0)
         self.problem = problem
-        self.monitor = setup.monitor
-        return disc, problem, control, rs, setup.monitor
+        self.monitor = WithRanges(setup.monitor, FieldRanges(model))
+        return disc, problem, control, rs, self.monitor
 
     def execute(self) -> dict:
         if self.continuation is not None:
@@ -293,7 +294,8 @@ class Run:
         t_resume = resume["time"] if resume else None
         writers = [(FieldWriter(disc, self.outdir, d, stems[r, d], r, resume_at=t_resume), fields)
                    for (r, d), fields in groups.items()]
-        columns = ["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(self.scene.history_columns)
+        columns = (["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(self.scene.history_columns)
+                   + scene_monitor.ranges.columns())
         history = History(os.path.join(self.outdir, "history.csv"), columns, self.comm, append=bool(resume))
         return writers, history
 

@@ -21,7 +21,7 @@ from petthm.mesh import generate as meshing
 from petthm.params import CELSIUS, MESH, param
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
-from petthm.physics.monitors import Balances, FractureWells, TemperatureRange, Worst, fracture_balances
+from petthm.physics.monitors import Balances, FractureWells, Worst, fracture_balances
 from petthm.scenes.base import Monitor
 
 #: ``auto`` first rock layer of a layered mesh: this fraction of the rock's
@@ -188,35 +188,26 @@ def strip_with_fracture(path, length, width, size, fracture_size):
 
 
 class WellsMonitor(Monitor):
-    """Well histories, balances and (with heat) Tf's range against [Tinj, T0]."""
+    """Well histories and balances (the temperatures' ranges: run/ranges.py)."""
 
     carried = ("worst",)
 
-    def __init__(self, wells: FractureWells | None, balances: Balances, worst: Worst,
-                 tf_range: TemperatureRange | None = None):
-        self.wells, self.balances, self.worst, self.tf_range = wells, balances, worst, tf_range
+    def __init__(self, wells: FractureWells | None, balances: Balances, worst: Worst):
+        self.wells, self.balances, self.worst = wells, balances, worst
 
     def __call__(self, problem, t, X=None) -> dict:
         out = self.wells(problem, t, X) if self.wells is not None else {}
-        if self.tf_range is not None:
-            out.update(self.tf_range(problem, t, X))
         out.update(self.balances(problem, t, X))
         return out
 
 
-def tf_range(p, worst: Worst, warn_above=None, hint="") -> TemperatureRange:
-    return TemperatureRange("Tf", p.injection_temperature, p.initial_temperature, worst, warn_above, hint)
-
-
-def heat_wells_monitor(b: ModelBuilder, wells, reference_aperture: float | None = None, warn_above=None,
-                       hint: str = "") -> WellsMonitor:
-    """Wells, mass and energy balances and Tf's bounds of a fracture TH model
-    (the fracture's aperture, or the deformable fracture's initial one)."""
+def heat_wells_monitor(b: ModelBuilder, wells, reference_aperture: float | None = None) -> WellsMonitor:
+    """Wells, mass and energy balances of a fracture TH model (the
+    fracture's aperture, or the deformable fracture's initial one)."""
     p, worst = b.p, Worst()
     a = p.fracture_aperture if reference_aperture is None else reference_aperture
-    return WellsMonitor(wells, balances_of(b, a, p.initial_pressure, True, worst), worst,
-                        tf_range(p, worst, warn_above, hint))
+    return WellsMonitor(wells, balances_of(b, a, p.initial_pressure, True, worst), worst)
 
 
 __all__ = ["rigid_fracture_physics", "transmissivity", "rate_pressure_scale", "balances_of", "far_sides",
-           "strip_with_fracture", "WellsMonitor", "tf_range", "CELSIUS"]
+           "strip_with_fracture", "WellsMonitor", "CELSIUS"]

@@ -194,7 +194,7 @@ class Lauwerier(Scene):
     time = TimeDefaults(final_time=1e8, dt_initial=100.0, dt_growth=1.05, dt_max=1e6, mesh_size=10.0,
                         output_interval=20)
     history_columns = ("injection_pressure", "production_temperature", "production_rate", "outlet_error",
-                       "Tf_min", "Tf_max", "mass_balance", "energy_balance")
+                       "mass_balance", "energy_balance")
     profile_times = (1e7, 1e8)
 
     def __init__(self, run, p):

@@ -113,7 +113,7 @@ class RigidFracture(Scene):
     time = TimeDefaults(final_time=1e9, dt_initial=100.0, dt_growth=1.05, dt_max=5e6, mesh_size=25.0,
                         output_interval=25)
     history_columns = ("injection_pressure", "production_temperature", "production_rate", "leakoff_fraction",
-                       "Tf_min", "Tf_max", "mass_balance", "energy_balance")
+                       "mass_balance", "energy_balance")
 
     def permeability(self, dim):
         """The matrix permeability tensor ('0,k': 1D leakoff normal to the

@@ -54,7 +54,6 @@ from petthm.scenes.fractured import (
     balances_of,
     first_layer,
     first_layer_param,
-    tf_range,
 )
 from petthm.scenes.friction import slip_columns
 from petthm.solvers.recipes import flow_heat_first_recipe
@@ -110,9 +109,9 @@ class _Scene3Monitor(Monitor):
 
     carried = ("worst", "peak")
 
-    def __init__(self, scene, wells: MatrixWells, balances, worst, law, tf):
+    def __init__(self, scene, wells: MatrixWells, balances, worst, law):
         self.scene, self.wells, self.balances, self.worst = scene, wells, balances, worst
-        self.law, self.tf = law, tf
+        self.law = law
         self.last, self.peak = {}, (0.0, 0.0)
 
     def __call__(self, problem, t, X=None):
@@ -144,7 +143,6 @@ class _Scene3Monitor(Monitor):
         out["closed_opening"] = probes.global_max(comm, [opening]) / a0
         out.update(slip_columns(problem, fields=f) if problem.model.friction_law is not None else
                    {"slip_max": np.nan, "slipping_area": np.nan})
-        out.update(self.tf(problem, t, X))
         out.update(self.balances(problem, t, X))
         self.worst.update("aperture_identity", out["aperture_identity"])
         if best > self.peak[1]:
@@ -200,7 +198,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
                        "production_temperature",
                        "aperture_increase_max", "aperture_increase_ratio", "aperture_increase_x",
                        "aperture_increase_y", "aperture_increase_z", "raised_area", "lam_min", "nodes_open",
-                       "aperture_identity", "closed_opening", "slip_max", "slipping_area", "Tf_min", "Tf_max",
+                       "aperture_identity", "closed_opening", "slip_max", "slipping_area",
                        "mass_balance", "energy_balance")
 
     @classmethod
@@ -376,5 +374,5 @@ class InclinedPenny(ClosedUnderStress, Scene):
                   "pm": FieldScale(sp.scale, sp.offset), "Tf": sT, "Tm": FieldScale(sT.scale, sT.offset)}
         init = {"lam": constant(self.lam0), "pf": constant(p0), "pm": constant(p0), "Tf": constant(T0),
                 "Tm": constant(T0)}
-        monitor = _Scene3Monitor(self, wells, balances, worst, b.aperture.law, tf_range(p, worst))
+        monitor = _Scene3Monitor(self, wells, balances, worst, b.aperture.law)
         return Setup(model, bcs, scales, init, monitor)

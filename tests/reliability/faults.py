@@ -8,7 +8,10 @@ runs ``python -m petthm SCENE [options]`` with
   (SIGKILL) after it has begun ``checkpoint.h5.tmp`` and before the file is
   complete and renamed: a kill -9 in the middle of a checkpoint write;
 * ``no-space``: from the N-th output on, the file system reports no free
-  space (for machines where a test cannot mount a small tmpfs).
+  space (for machines where a test cannot mount a small tmpfs);
+* ``forget-carried``: the checkpoints hold none of the monitors' carried
+  state (N unused): the negative control of the whole-run summary of a
+  restarted run (tests/reliability/test_restart_consistency.py).
 """
 import os
 import signal
@@ -45,6 +48,11 @@ def _no_space(n: int) -> None:
     output.os.statvfs = statvfs
 
 
+def _forget_carried(n: int) -> None:
+    from petthm.run import ranges
+    ranges.WithRanges.carried_state = lambda self: {}
+
+
 if __name__ == "__main__":
     mode, n, args = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
     import petsc4py
@@ -52,5 +60,7 @@ if __name__ == "__main__":
     from petthm.__main__ import isolate_singleton, main
     isolate_singleton()
     petsc4py.init([sys.argv[0]] + args[1:])          # what main does, before the patches import PETSc
-    {"kill-in-checkpoint": _kill_in_checkpoint, "no-space": _no_space}[mode](n)
+    modes = {"kill-in-checkpoint": _kill_in_checkpoint, "no-space": _no_space,
+             "forget-carried": _forget_carried}
+    modes[mode](n)
     sys.exit(main(args))

@@ -4,11 +4,14 @@ solver, output and run-control options and a later end time may change),
 a completed run is left as it is, a restarted run's summary reports the
 whole run, and damaged files are named."""
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
-from conftest import LAUWERIER_COARSE, folder_digests, read_json, read_text, run_petthm
+from conftest import LAUWERIER_COARSE, MPI_ENV, ROOT, folder_digests, read_json, read_text, run_petthm
 
 LAUWERIER = (*LAUWERIER_COARSE, "-thm_final_time", 1e6)
 
@@ -155,3 +158,22 @@ def test_a_restarted_run_reports_the_whole_run(tmp_path, scene):
     if "error" in ref:
         assert "errors against the reference:" in proc.stdout
     assert read_json(tmp_path / "run" / "summary.json")["status"] == "completed"
+
+
+def test_the_whole_run_check_fails_when_the_checkpoint_forgets_the_monitors(tmp_path):
+    """Negative control of the test above: the first part of the run writes
+    checkpoints without the monitors' carried state (tests/reliability/
+    faults.py, forget-carried); the restarted run's summary then differs
+    from the uninterrupted run's, and the comparison says so."""
+    scene, options = "lauwerier", (*LAUWERIER[1:], "-thm_pc_reuse", "off")
+    _, ref = run_petthm(scene, tmp_path / "ref", *options)
+    first = [sys.executable, os.path.join(ROOT, "tests", "reliability", "faults.py"), "forget-carried", "0",
+             scene, "-thm_output_dir", str(tmp_path / "run"), "-thm_quiet", *map(str, options),
+             "-ts_max_steps", "40"]
+    proc = subprocess.run(first, cwd=ROOT, env=dict(os.environ, **MPI_ENV), capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 4, proc.stderr
+    _, s = run_petthm(scene, tmp_path / "run", *options, "-thm_restart", tmp_path / "run")
+    with pytest.raises(AssertionError):
+        _same({k: v for k, v in s.items() if k not in PER_PROCESS},
+              {k: v for k, v in ref.items() if k not in PER_PROCESS})
