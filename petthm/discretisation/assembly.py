@@ -304,6 +304,8 @@ class Assembler:
                     else:
                         f1ref = reference_flux(W[:, :, None, None] * f1, ctx.Jinv)
                         r = r + tab.D.T @ f1ref.reshape(nc, -1, f1.shape[2])
+                if term.element is not None:
+                    r = r + term.element(ctx)                               # (nc, nb, m)
                 self._scatter(out, term.field, cells, r)
         for ft in self.model.facets:
             for fb in self._facets[ft.boundary]:
@@ -473,6 +475,8 @@ class Assembler:
                 g = Jinv[:, None, None, None] @ g.transpose(0, 1, 2, 4, 3, 5) @ JinvT[:, None, None, None]
                 g = (g * weights(c)[:, :, None, None, None, None]).transpose(0, 2, 3, 1, 4, 5)
             K += g.reshape(nc * m * n, -1) @ ref["3", c]
+        if jb.element is not None:
+            K += np.asarray(jb.element(ctx)).reshape(K.shape)
         return K.reshape(nc, m, n, nbF, nbG)
 
     # -- functionals ------------------------------------------------------------

@@ -5,7 +5,9 @@ in SI units, with the geometry of the batch.
 Kernels (``petthm.physics.kernels``) call only the public methods and properties:
 ``value``, ``grad``, ``dot``, ``grad_dot``, ``lap``, ``x``, ``h``, ``t``,
 ``shift``, ``shape``, ``normals`` (fracture faces), ``n`` (facets),
-``cell_values`` and ``cached`` (point data several kernels of a batch share).
+``cell_values`` and ``cached`` (point data several kernels of a batch share);
+element terms (``model.CellResidual.element``) also ``nodal``, ``weights``,
+``basis`` and ``basis_gradients``.
 """
 from __future__ import annotations
 
@@ -101,6 +103,23 @@ class CellContext:
         if key not in self._cache:
             self._cache[key] = self._asm.tab(name).phi @ self._nodal(name)
         return self._cache[key]
+
+    def nodal(self, name):
+        """The field's values at the element's nodes (nc, nb, ncomp), SI."""
+        return self._nodal(name)
+
+    @property
+    def weights(self):
+        """Quadrature weights times |det J| (nc, nq)."""
+        return self._asm.W[self._cells]
+
+    def basis(self, name):
+        """The field's basis at the quadrature points (nq, nb)."""
+        return self._asm.tab(name).phi
+
+    def basis_gradients(self, name):
+        """Physical gradients of a P1 field's basis on each cell (nc, nb, dim)."""
+        return self._asm.basis_gradients(name, self._cells)
 
     def dot(self, name):
         key = ("d", name)

@@ -70,11 +70,15 @@ MATRIX_LUMPED = Region(Domain.MATRIX, lumped=True)
 
 @dataclass(frozen=True)
 class CellResidual:
-    """Residual of ``field`` on the cells: int f0 . v + f1 : grad v."""
+    """Residual of ``field`` on the cells: int f0 . v + f1 : grad v, plus an
+    ``element`` term: a kernel that returns each element's residual vector
+    (nc, nb, ncomp) directly (a term that couples the element's nodal values,
+    such as the algebraic upwinding of ``kernels/transport.py``)."""
     field: FieldRef
     f0: Kernel | None = None
     f1: Kernel | None = None
     region: Region = MATRIX
+    element: Kernel | None = None
 
 
 @dataclass(frozen=True)
@@ -88,6 +92,8 @@ class CellJacobian:
     g3: Kernel | None = None
     g2_lap: Kernel | None = None
     region: Region = MATRIX
+    #: each element's matrix (nc, ncomp_test, ncomp_trial, nb_test, nb_trial), added as it is
+    element: Kernel | None = None
     #: the block depends on neither the state, the time nor the shift (a
     #: linear term with constant coefficients, e.g. elasticity): ``Problem``
     #: assembles it once and keeps its values until the residual scaling changes

@@ -151,8 +151,8 @@ class ModelBuilder:
         biot = (el.u, el.biot) if el is not None and flow is not None and el.p == flow.p and el.biot else ()
         h = hk.Heat(Domain.MATRIX, "Tm", C, p.conductivity if conductivity is None else conductivity,
                     p.fluid_rho_c if advect else 0.0, flow, velocity=velocity,
-                    source=source, reference_temperature=reference_temperature, degree=degree, supg=supg,
-                    lumped=lumped, biot=biot)
+                    source=source, reference_temperature=reference_temperature, degree=degree,
+                    biot=biot, **self._transport(degree, advect, supg, lumped))
         self.model.add_field(FieldSpec("Tm", 1, degree, **TEMPERATURE))
         self.model.add(hk.heat_terms(h))
         self.heats[Domain.MATRIX] = h
@@ -255,13 +255,27 @@ class ModelBuilder:
                                  "with a permeable matrix (the heat carried by leakoff needs the wall flux)")
             self.model.add(hk.exchange_terms("Tf", traces("Tm"), hw, lumped=lumped))
         h = hk.Heat(Domain.FRACTURE, "Tf", a * p.fluid_rho_c, a * p.fluid_conductivity, p.fluid_rho_c,
-                    self.flows[Domain.FRACTURE], degree=degree, supg=supg, aperture=self.aperture,
-                    source=source)
+                    self.flows[Domain.FRACTURE], degree=degree, aperture=self.aperture,
+                    source=source, **self._transport(degree, True, supg, False))
         self.model.add_field(FieldSpec("Tf", 1, degree, Domain.FRACTURE, **TEMPERATURE))
         if hw is not None:
             self.model.add(hk.heat_terms(h))
         self.heats[Domain.FRACTURE] = h          # tied: its terms in build(), with the rock's wall flux
         return h
+
+    def _transport(self, degree: int, advect: bool, supg: bool, lumped: bool) -> dict:
+        """The heat advection's discretisation (``-thm_heat_transport``; a
+        scene that passes ``supg=False`` asks for Galerkin): SUPG, or
+        algebraic upwinding (kernels/transport.py) with the capacity lumped
+        (with or without advection: a consistent capacity over- and
+        undershoots next to a sudden change of the wall temperature)."""
+        scheme = getattr(self.p, "heat_transport", "supg") if supg else "galerkin"
+        if scheme == "upwind" and degree != 1:
+            raise InputError(f"option -thm_heat_transport upwind: P1 temperatures only (this run has "
+                             f"P{degree}: -thm_fe_degree 1, or -thm_heat_transport supg)")
+        if scheme == "upwind":
+            return {"supg": False, "lumped": True, "upwind": advect}
+        return {"supg": scheme == "supg", "lumped": lumped}
 
     def wells(self, terms: list[PointTerm]) -> None:
         self.model.points.extend(terms)

@@ -178,6 +178,11 @@ DECLARED = {
                                            "1-6 % where the wall layers are thin against the fracture "
                                            "cells; manual, verification: fracture flow and heat)",
                                            kind=DISCRETISATION),
+    "heat_transport": param("supg", "-", "discretisation of the heat advection of P1 temperatures: supg "
+                            "(streamline upwind Petrov-Galerkin), upwind (algebraic upwinding with the "
+                            "capacity lumped: bound-preserving, first order where advection dominates) or "
+                            "galerkin (no stabilisation); theory manual, discrete bounds",
+                            choices=("supg", "upwind", "galerkin"), kind=DISCRETISATION),
     # state and wells (sections 2, 9)
     "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0", kind=PHYSICS),
     "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0", kind=PHYSICS),
@@ -206,7 +211,7 @@ FLUID_HEAT = ("fluid_density", "fluid_heat_capacity", "fluid_conductivity")
 FLUID_FLOW = ("fluid_viscosity", "fluid_compressibility", "fluid_thermal_expansion")
 JOINT = ("fracture_aperture", "fracture_normal_stiffness", "fracture_residual_fraction")
 CONTACT = ("contact_pairing", "fracture_friction", "fracture_cohesion")
-FRACTURE_HEAT = ("fracture_heat_exchange", "fracture_supg_wall_conduction")
+FRACTURE_HEAT = ("fracture_heat_exchange", "fracture_supg_wall_conduction", "heat_transport")
 #: the defaults of a scene whose reference solution is frictionless
 FRICTIONLESS = {"fracture_friction": 0.0}
 WELLS = ("injection_rate", "injection_temperature", "production_pressure", "well_radius")

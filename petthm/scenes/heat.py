@@ -26,7 +26,7 @@ from petthm.discretisation.assembly import FieldScale
 from petthm.discretisation.constraints import Dirichlet
 from petthm.discretisation.model import MATRIX
 from petthm.mesh import generate as meshing
-from petthm.params import CELSIUS, DISCRETISATION, MESH, PHYSICS, param
+from petthm.params import CELSIUS, MESH, PHYSICS, param
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import heat as hk
@@ -71,6 +71,7 @@ class HeatMMS(Scene):
     parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT, rock_density=1.0,
                            rock_heat_capacity=1.0,
                            rock_conductivity=1.0, fluid_density=1.0, fluid_heat_capacity=1.0),
+                  mt.group("Discretisation", ("heat_transport",)),
                   MMSParams)
     time = TimeDefaults(final_time=1.0, dt_initial=0.25, mesh_size=0.125)
     t_ref = 1.0
@@ -233,7 +234,6 @@ class AdvectionParams:
                                       kind=PHYSICS)
     advection_length: float = param(100.0, "m", "channel length", lo=0.0, lo_open=True, kind=MESH)
     advection_height: float = param(20.0, "m", "channel height", lo=0.0, lo_open=True, kind=MESH)
-    supg: bool = param(True, "-", "SUPG stabilisation", kind=DISCRETISATION)
 
 
 class _PecletMonitor(Monitor):
@@ -258,6 +258,7 @@ class HeatAdvection(Scene):
                            fluid_conductivity=0.0),
                   mt.group("Temperatures", ("initial_temperature", "injection_temperature"),
                            initial_temperature=100.0),
+                  mt.group("Discretisation", ("heat_transport",)),
                   AdvectionParams)
     time = TimeDefaults(final_time=1.0e7, dt_initial=2e5, output_interval=5, mesh_size=2.5)
     history_columns = ("cell_peclet",)
@@ -279,7 +280,7 @@ class HeatAdvection(Scene):
     def build(self, mesh, degree):
         p = self.p
         b = ModelBuilder(p, mesh.dim)
-        heat = b.matrix_heat(degree, velocity=self._velocity, supg=p.supg, reference_temperature=p.T0)
+        heat = b.matrix_heat(degree, velocity=self._velocity, reference_temperature=p.T0)
         model = b.build()
         model.facets.append(hk.outflow_term(heat, "outlet"))
         Ti, T0 = p.T_inj, p.T0

@@ -61,6 +61,6 @@ def test_supg_keeps_an_advected_front_bounded(tmp_path, degree):
 
 def test_galerkin_without_supg_oscillates(tmp_path):
     """Negative control for the boundedness test: plain Galerkin at Pe >> 1."""
-    _, s = run_petthm("heat_advection", tmp_path, "-thm_supg", "0", "-thm_fe_degree", 1,
+    _, s = run_petthm("heat_advection", tmp_path, "-thm_heat_transport", "galerkin", "-thm_fe_degree", 1,
                       "-thm_final_time", 2e6, "-thm_dt_initial", 2e4)
     assert s["bounds"]["Tm"]["violation_fraction"] > 0.01

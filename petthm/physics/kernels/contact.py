@@ -236,3 +236,27 @@ class Aperture:
             out.append(CellJacobian(test, m.trace(side), g0=partial(g0_u, side.sign),
                                     g2=partial(g2_u, side.sign) if has1 else None, region=region))
         return out
+
+    def element_jacobians(self, test, E: Callable, region: Region) -> list:
+        """Blocks d(residual of ``test``)/d(lam, u+, u-) of an element term
+        through the aperture: ``E(ctx)`` (nc, nb, nq) is d r_i / d a_q, the
+        derivative of the element residual with respect to the aperture at
+        each quadrature point of ``region`` (the term depends on a, not on da/dt)."""
+        m = self.mech
+
+        def lam_block(ctx):
+            st = self.state(ctx)
+            dlam = np.broadcast_to(st.dlam, ctx.shape)
+            return (E(ctx) @ (dlam[..., None] * ctx.basis(m.lam)[None]))[:, None, None]
+
+        def u_block(sign, ctx):
+            st = self.state(ctx)
+            H = np.broadcast_to(st.H, ctx.shape)
+            K = E(ctx) @ (sign * H[..., None] * ctx.basis(m.trace(Side.PLUS))[None])    # (nc, nbF, nbG)
+            n = ctx.normals[:, 0, :]                                                      # (nc, d)
+            return K[:, None, None, :, :] * n[:, None, :, None, None]
+        out = [CellJacobian(test, m.lam, region=region, element=lam_block)]
+        out += [CellJacobian(test, m.trace(side), region=region, element=partial(u_block, side.sign))
+                for side in SIDES]
+        return out
+

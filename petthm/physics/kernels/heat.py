@@ -50,6 +50,10 @@ operator with the (lumped) exchange as a source: Tf stays in the bounds,
 at the price of consistency O(tau hw (T - Tm)) in the exchange layer,
 which no mesh resolves there (its thickness rho_f C_f q / hw is a few mm).
 With w = 1 the SUPG term vanishes, so it does not disturb the balance.
+``Heat.upwind`` replaces SUPG by the algebraic upwinding of
+``kernels/transport.py`` (bound-preserving, first order), with the
+capacity lumped (``Heat.lumped``; on a deformable fracture the stored
+energy's C d(aT)/dt too).
 Every Jacobian block is exact (tests check them against finite
 differences with a negative control).
 """
@@ -72,6 +76,7 @@ from petthm.physics.kernels.flow import (
     storage_rate,
     unit_darcy,
 )
+from petthm.physics.kernels.transport import Upwinding, upwinding_terms
 from petthm.physics.kernels.wallflux import SIDES, WallConduction, supg_g3, wall_flux
 
 #: f(x (nc, nq, d), t) -> array broadcastable to the quadrature points
@@ -107,6 +112,7 @@ class Heat:
     lumped: bool = False            # capacity term by row-sum lumping (P1, no aperture)
     biot: tuple = ()                # (u field, alpha): alpha d(div u)/dt in the flow's mass balance (SUPG)
     wall: WallConduction | None = None      # the rock's wall conduction in R (kernels/wallflux.py)
+    upwind: bool = False            # algebraic upwinding (kernels/transport.py) instead of SUPG
 
     @property
     def advects(self) -> bool:
@@ -235,8 +241,8 @@ def _conduction(hp: _HeatPoint, gT):
 
 
 def heat_f0_capacity(h: Heat, ctx):
-    """C dT/dt alone (the lumped capacity term)."""
-    return (h.capacity * ctx.dot(h.T)[..., 0])[..., None]
+    """The stored energy's rate alone (the lumped capacity term; ``heat_f0``)."""
+    return stored_energy_rate(h, ctx)[..., None]
 
 
 def increment_product(ctx, adot, Tdot):
@@ -245,20 +251,22 @@ def increment_product(ctx, adot, Tdot):
     return adot * Tdot / ctx.shift if ctx.shift > 0 else np.zeros_like(adot)
 
 
+def stored_energy_rate(h: Heat, ctx):
+    """C dT/dt, or C d(aT)/dt on a deformable fracture (``heat_f0``), (nc, nq)."""
+    ap = aperture_state(h, ctx)
+    if ap is None:
+        return h.capacity * ctx.dot(h.T)[..., 0]
+    Tdot = ctx.dot(h.T)[..., 0]
+    T = ctx.value(h.T)[..., 0]
+    return h.capacity * (ap.a * Tdot + T * ap.adot - increment_product(ctx, ap.adot, Tdot))
+
+
 def heat_f0(h: Heat, ctx):
     """C dT/dt (- s); on a deformable fracture the stored energy's rate
     C d(aT)/dt as backward Euler's exact quotient C (a T - a_old T_old)/dt
     = C (a Tdot + T adot - adot Tdot dt): the energy balance telescopes from
     step to step (without the last term it is off by C da dT per step)."""
-    ap = aperture_state(h, ctx)
-    if h.lumped:
-        r = np.zeros(ctx.shape)
-    elif ap is None:
-        r = h.capacity * ctx.dot(h.T)[..., 0]
-    else:
-        Tdot = ctx.dot(h.T)[..., 0]
-        T = ctx.value(h.T)[..., 0]
-        r = h.capacity * (ap.a * Tdot + T * ap.adot - increment_product(ctx, ap.adot, Tdot))
+    r = np.zeros(ctx.shape) if h.lumped else stored_energy_rate(h, ctx)
     if h.source is not None:
         r = r - np.broadcast_to(h.source(ctx.x, ctx.t), ctx.shape)
     return r[..., None]
@@ -387,8 +395,10 @@ def _check_heat(h: Heat) -> None:
         raise ValueError("a conductivity tensor is only supported without advection")
     if h.aperture is not None and (not np.isscalar(h.conductivity) or h.velocity is not None):
         raise ValueError("a deformable fracture takes a scalar conductivity and the flow's velocity")
-    if h.lumped and (h.aperture is not None or h.degree != 1):
-        raise ValueError("a lumped capacity needs P1 and a fixed aperture")
+    if h.lumped and h.degree != 1:
+        raise ValueError("a lumped capacity needs P1")
+    if h.upwind and (h.supg or not h.lumped or not h.advects):
+        raise ValueError("algebraic upwinding replaces SUPG, with the capacity lumped, on advected heat")
 
 
 def heat_terms(h: Heat) -> tuple[list, list]:
@@ -417,8 +427,19 @@ def heat_terms(h: Heat) -> tuple[list, list]:
         jac += [CellJacobian(h.T, Adjacent(h.wall.field, s), g3=partial(heat_g3_wall, hh, s), region=region)
                 for s in SIDES]
     if h.aperture is not None:
-        jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), partial(heat_s1_aperture, hh))
+        s0 = _no_aperture_term if h.lumped else partial(heat_s0_aperture, hh)
+        jac += h.aperture.jacobians(h.T, s0, partial(heat_s1_aperture, hh))
+        if h.lumped:
+            jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), None, lumped)
+    if h.upwind:
+        r, j = upwinding_terms(Upwinding(hh, heat_point))
+        res, jac = res + r, jac + j
     return res, jac
+
+
+def _no_aperture_term(ctx):
+    """d f0/d a where f0 does not depend on the aperture (the capacity lumped)."""
+    return np.zeros(ctx.shape)
 
 
 def heat_g3_wall(h: Heat, side, ctx):

@@ -1,0 +1,141 @@
+"""-thm_heat_transport upwind (kernels/transport.py): the exact Jacobian of the
+algebraic upwinding against finite differences with negative controls, the
+temperatures within the bounds the scene gives (theory manual, "Discrete
+bounds") where SUPG leaves them, the energy balance, and the first-order
+rate on the heat MMS."""
+import dataclasses
+
+import pytest
+
+from conftest import build_problem, fitted_slope, read_csv, run_petthm
+from petthm.discretisation.model import FRACTURE
+from petthm.verification.jacobian import jacobian_fd_block_errors
+
+COARSE_LAUWERIER = dict(thm_mesh_size=40, thm_lauwerier_fracture_size=10, thm_lauwerier_width=20,
+                        thm_final_time=1e6)
+#: acceptance (issue 49): the largest excursion beyond the bounds, as a fraction of their range
+BOUND_TOLERANCE = 1e-3
+
+
+def _coupled(tmp_path):
+    """The closed coupled MMS (P1): Tf advected by the cubic law through the
+    aperture a(lam, u+-), Tm by Darcy flow, mu(T) of water."""
+    return build_problem(tmp_path, "coupled_mms", thm_fe_degree=1, thm_mesh_size=0.25,
+                         thm_coupled_mms_state="closed", thm_heat_transport="upwind")
+
+
+def _lauwerier(tmp_path):
+    return build_problem(tmp_path, "lauwerier", thm_fe_degree=1, thm_fluid_viscosity="water",
+                         thm_fracture_heat_exchange="nusselt", thm_heat_transport="upwind",
+                         **COARSE_LAUWERIER)
+
+
+def test_upwinding_jacobian_blocks_match_finite_differences(tmp_path):
+    err = jacobian_fd_block_errors(_coupled(tmp_path / "mms"), t=0.5, shift=2.0, eps=(1e-6, 1e-4))
+    print({f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
+    assert {("Tm", "pm"), ("Tm", "Tm"), ("Tf", "pf"), ("Tf", "Tf"), ("Tf", "lam"), ("Tf", "u")} <= set(err)
+    assert max(err.values()) <= 1e-6
+    err = jacobian_fd_block_errors(_lauwerier(tmp_path / "lauwerier"), t=1e5, shift=1e-4, eps=(1e-6, 1e-4))
+    print({f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
+    assert max(err.values()) <= 1e-6
+
+
+def _without(problem, region, keep):
+    """The problem with the upwinding's element blocks on ``region`` that
+    ``keep`` rejects left out of the Jacobian."""
+    asm = problem.region(region)
+    asm.model.jacobians[:] = [j for j in asm.model.jacobians if j.element is None or keep(j)]
+    asm.build_pattern()
+    problem.J = None
+    return problem
+
+
+@pytest.mark.parametrize("trial", ["pf", "lam", "Tf"])
+def test_upwinding_jacobian_check_fails_without_a_block(tmp_path, trial):
+    """Negative controls: without the upwinding's derivative with respect to
+    the pressure (b ~ grad pf), the aperture (b ~ a^3: lam) or the
+    temperature (the diffusion itself and mu(T)), that block is wrong."""
+    problem = _without(_coupled(tmp_path), FRACTURE, lambda j: not (j.test == "Tf" and j.trial == trial))
+    err = jacobian_fd_block_errors(problem, t=0.5, shift=2.0, eps=1e-6)
+    print(trial, err[("Tf", trial)])
+    assert err[("Tf", trial)] > 1e-3
+
+
+def _excursion(summary, field):
+    b = summary["bounds"][field]
+    return b["violation"] / (b["upper"] - b["lower"])
+
+
+def test_upwinding_keeps_an_advected_front_in_bounds(tmp_path):
+    """heat_advection at cell Peclet >= 100: SUPG over- and undershoots, upwinding does not."""
+    _, s = run_petthm("heat_advection", tmp_path / "upwind", "-thm_fe_degree", 1,
+                      "-thm_heat_transport", "upwind")
+    _, supg = run_petthm("heat_advection", tmp_path / "supg", "-thm_fe_degree", 1)
+    print("excursion upwind", _excursion(s, "Tm"), "supg", _excursion(supg, "Tm"))
+    assert s["cell_peclet_min"] >= 100
+    assert _excursion(s, "Tm") <= BOUND_TOLERANCE
+    assert _excursion(s, "Tm") < 0.01 * _excursion(supg, "Tm")
+    rows = read_csv(tmp_path / "upwind" / "history.csv")
+    assert float(rows[-1]["Tm_min"]) < 21.0                   # the front has entered
+
+
+def test_upwinding_keeps_lauwerier_in_bounds_with_its_energy_balance(tmp_path):
+    """Lauwerier (P1): Tf and Tm within [Tinj, T0] (SUPG with a consistent
+    rock capacity: Tm 20 K above T0 next to the cooled wall), every step's
+    energy balance at round-off, the outlet temperature within 6 % of the
+    analytical solution (first order in the front)."""
+    _, s = run_petthm("lauwerier", tmp_path, "-thm_fe_degree", 1, "-thm_heat_transport", "upwind")
+    for f in ("Tf", "Tm"):
+        print(f, s["bounds"][f])
+        assert _excursion(s, f) <= BOUND_TOLERANCE
+    rows = read_csv(tmp_path / "history.csv")
+    assert max(abs(float(r["energy_balance"])) for r in rows) <= 1e-8
+    print("errors", s["error"])
+    assert s["error"]["outlet_max_rel_t_ge_1e4"] <= 0.06
+    assert s["error"]["profile_max_rel_t1e+08"] <= 2e-3
+
+
+def test_upwinding_keeps_scene3_in_bounds(tmp_path):
+    """Scene 3, case 3, coarse mesh, 30 years: SUPG leaves [Tinj, T0] by
+    18 K below and 26 K above; with upwinding Tf and Tm stay within 1e-3 of the range."""
+    _, s = run_petthm("inclined_penny", tmp_path, "-options_file",
+                      "options/scenes/inclined_penny_coarse.opts", "-thm_scene3_case", 3,
+                      "-thm_heat_transport", "upwind")
+    assert s["status"] == "completed"
+    for f in ("Tf", "Tm"):
+        print(f, s["bounds"][f])
+        assert _excursion(s, f) <= BOUND_TOLERANCE
+
+
+def test_upwinding_converges_at_first_order_on_the_heat_mms(tmp_path):
+    """The low-order scheme's price: its diffusion ~ |b| h makes the L2 error
+    first order (SUPG: second), H1 stays first order."""
+    hs, l2, h1 = [], [], []
+    for k, size in enumerate([0.25, 0.125, 0.0625, 0.03125]):
+        _, s = run_petthm("heat_mms", tmp_path / f"r{k}", "-thm_fe_degree", 1, "-thm_mesh_size", size,
+                          "-thm_heat_transport", "upwind")
+        hs.append(s["h_max"])
+        l2.append(s["error"]["Tm_l2"])
+        h1.append(s["error"]["Tm_h1"])
+    sl2, sh1 = fitted_slope(hs, l2), fitted_slope(hs, h1)
+    print(f"upwind heat_mms 2D P1: L2 slope {sl2:.3f}, H1 slope {sh1:.3f}, errors {l2} {h1}")
+    assert sl2 >= 1.0 and abs(sh1 - 1.0) <= 0.2
+    assert sl2 < 1.8                       # not the second order of the Galerkin and SUPG schemes
+
+
+def test_upwinding_needs_p1(tmp_path):
+    proc, _ = run_petthm("heat_advection", tmp_path, "-thm_fe_degree", 2, "-thm_heat_transport", "upwind",
+                         check=False)
+    assert proc.returncode == 2                      # an input error
+    assert proc.stderr.strip().splitlines()[-1].startswith(
+        "petthm: error: option -thm_heat_transport upwind: P1 temperatures only")
+
+
+def test_upwinding_is_registered_only_for_advected_heat():
+    """Heat that is not advected has the capacity lumped and no upwinding term."""
+    from petthm.discretisation.model import Domain
+    from petthm.physics.kernels import heat as hk
+    h = hk.Heat(Domain.MATRIX, "Tm", 1.0, 1.0, degree=1, supg=False, lumped=True)
+    with pytest.raises(ValueError):
+        hk.heat_terms(dataclasses.replace(h, upwind=True))
+    assert not any(t.element for t in hk.heat_terms(h)[0])
