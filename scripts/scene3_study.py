@@ -141,7 +141,17 @@ def _in_plane(X, dip_deg):
     return X @ np.array([math.cos(d), 0.0, -math.sin(d)]), X[:, 1]
 
 
+def resolution(out, cases) -> str:
+    """The runs' mesh and discretisation, for the figures' captions."""
+    d = run_dir(out, cases[0])
+    s, p = read_summary(d), parameters(d)
+    return (f"{s['cells']} cells, P{p.get('thm_fe_degree', 2)} u, P1 p and T, heat transport "
+            f"{p.get('thm_heat_transport', 'supg')}")
+
+
 def fig8_10(out, cases):
+    """Tf, the aperture and the contact traction on the fracture at 10, 20 and 30
+    years: a row per case, a column per time, one colour scale per field."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -149,31 +159,42 @@ def fig8_10(out, cases):
     panels = {"Tf": ("Tf (degC)", "coolwarm", 1.0), "aperture": ("aperture (mm)", "viridis", 1e3),
               "lam": ("contact traction (MPa)", "magma", 1e-6)}
     years = (10, 20, 30)
+    caption = resolution(out, cases)
     for name, (title, cmap, scale) in panels.items():
-        fig, axs = plt.subplots(len(cases), 3, figsize=(13, 3.9 * len(cases)), squeeze=False)
-        for i, c in enumerate(cases):
+        shown = {}
+        for c in cases:
             d = run_dir(out, c)
             X, topo, times, f = _series(output_with(d, "fracture", name))
             p = parameters(d)
             xi, eta = _in_plane(X, p["thm_scene3_dip"])
-            tri = Triangulation(xi, eta, topo[:, :3])
+            for y in years:
+                k = int(np.argmin(np.abs(times - y * YEAR)))
+                if abs(times[k] - y * YEAR) <= 1e-6 * YEAR:
+                    shown[c, y] = (Triangulation(xi, eta, topo[:, :3]), f[name][k] * scale, p)
+        values = np.concatenate([v for _, v, _ in shown.values()]) if shown else np.zeros(1)
+        lo, hi = float(values.min()), float(values.max())
+        levels = np.linspace(lo, hi if hi > lo else lo + 1e-12, 21)
+        fig, axs = plt.subplots(len(cases), 3, figsize=(13, 3.7 * len(cases)), squeeze=False,
+                                layout="constrained")
+        cs = None
+        for i, c in enumerate(cases):
             for j, y in enumerate(years):
                 ax = axs[i, j]
-                k = int(np.argmin(np.abs(times - y * YEAR)))
-                if abs(times[k] - y * YEAR) > 1e-6 * YEAR:
+                if (c, y) not in shown:
                     ax.set_title(f"case {c}: no output at {y} years")
                     continue
-                cs = ax.tricontourf(tri, f[name][k] * scale, levels=20, cmap=cmap)
-                fig.colorbar(cs, ax=ax, shrink=0.85)
+                tri, v, p = shown[c, y]
+                cs = ax.tricontourf(tri, v, levels=levels, cmap=cmap)
                 ax.set_aspect("equal")
-                ax.set_title(f"case {c}, {y} years: {title}")
+                ax.set_title(f"case {c}, {y} years")
                 h = p["thm_scene3_well_spacing"] / 2
                 ax.plot([0, 0], [-h, h], "k^", ms=6)
                 ax.set_xlabel("along the dip (m)")
             axs[i, 0].set_ylabel("along the strike y (m)")
-        fig.suptitle(f"Scene 3: {title} on the fracture (cf. paper Figs. 8-10); wells above y = "
-                     f"-150 (injector) and +150 m (producer)")
-        fig.tight_layout()
+        if cs is not None:
+            fig.colorbar(cs, ax=axs, shrink=0.9, label=title)
+        fig.suptitle(f"Scene 3: {title} on the fracture (cf. paper Figs. 8-10); wells above y = -150 "
+                     f"(injector) and +150 m (producer)\n{caption}")
         fig.savefig(os.path.join(out, f"scene3_fig8_10_{name}.png"), dpi=100)
         plt.close(fig)
 
@@ -228,6 +249,10 @@ def fig12(out, cases):
         t = h["time"] / YEAR
         ax1.plot(t, h["aperture_increase_ratio"], "-", color=color,
                  label=f"case {c}: max (a - a_init) / a_init")
+        k = int(np.argmax(h["aperture_increase_ratio"]))
+        ax1.plot(t[k], h["aperture_increase_ratio"][k], "o", color=color, mfc="none", ms=9)
+        ax1.annotate(f"{t[k]:.1f} y", (t[k], h["aperture_increase_ratio"][k]), textcoords="offset points",
+                     xytext=(4, 6), fontsize=8, color=color)
         ax2.plot(t, h["production_temperature"] - p["thm_initial_temperature"], "--", color=color,
                  label=f"case {c}: production temperature change")
     ax1.set_xlabel("time (years)")
@@ -236,7 +261,8 @@ def fig12(out, cases):
     lines = ax1.get_legend_handles_labels()
     more = ax2.get_legend_handles_labels()
     ax1.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="center right")
-    ax1.set_title("Scene 3 (cf. paper Fig. 12)")
+    ax1.set_title(f"Scene 3 (cf. paper Fig. 12); circles: each case's largest increase\n"
+                  f"{resolution(out, cases)}", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "scene3_fig12_history.png"), dpi=110)
     plt.close(fig)
