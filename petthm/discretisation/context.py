@@ -6,8 +6,9 @@ Kernels (``petthm.physics.kernels``) call only the public methods and properties
 ``value``, ``grad``, ``dot``, ``grad_dot``, ``lap``, ``x``, ``h``, ``t``,
 ``shift``, ``shape``, ``normals`` (fracture faces), ``n`` (facets),
 ``cell_values`` and ``cached`` (point data several kernels of a batch share);
-element terms (``model.CellResidual.element``) also ``nodal``, ``weights``,
-``basis`` and ``basis_gradients``.
+element terms (``model.CellResidual.element``) also ``nodal``,
+``nodal_rate``, ``weights``, ``basis``, ``basis_gradients`` and
+``basis_gradients_at_points``.
 """
 from __future__ import annotations
 
@@ -107,6 +108,17 @@ class CellContext:
     def nodal(self, name):
         """The field's values at the element's nodes (nc, nb, ncomp), SI."""
         return self._nodal(name)
+
+    def nodal_rate(self, name):
+        """The rate of the field's nodal values (nc, nb, ncomp), SI."""
+        return self._nodal(name, dot=True)
+
+    def basis_gradients_at_points(self, name):
+        """Physical gradients of the field's basis at the quadrature points (nc, nq, nb, dim)."""
+        tab = self._asm.tab(name)
+        nq, nb, r = tab.dphi.shape
+        G = np.broadcast_to(tab.dphi.transpose(0, 2, 1)[None], (self.Jinv.shape[0], nq, r, nb))
+        return physical_gradient(G, self.Jinv)
 
     @property
     def weights(self):

@@ -126,7 +126,9 @@ class ModelBuilder:
         ``source`` s(x, t), 1/s: the manufactured solutions)."""
         fl = fk.Flow(Domain.MATRIX, "pm", "Tm" if heat else None, storage, permeability,
                      self.p.fluid_viscosity,
-                     thermal_storage if heat else 0.0, source=source)
+                     thermal_storage if heat else 0.0, source=source,
+                     reference_pressure=getattr(self.p, "initial_pressure", 0.0),
+                     reference_temperature=self.p.T0 if heat else 0.0)
         self.model.add_field(FieldSpec("pm", 1, degree, unit="Pa"))
         self.model.add(fk.flow_terms(fl))
         self.flows[Domain.MATRIX] = fl
@@ -222,7 +224,9 @@ class ModelBuilder:
         cf = p.fluid_compressibility if compressibility is None else compressibility
         beta = a * p.fluid_thermal_expansion if heat else 0.0
         fl = fk.Flow(Domain.FRACTURE, "pf", "Tf" if heat else None, a * cf, a ** 3 / 12 * np.eye(self.dim),
-                     p.fluid_viscosity, beta, aperture=self.aperture, source=source)
+                     p.fluid_viscosity, beta, aperture=self.aperture, source=source,
+                     reference_pressure=getattr(p, "initial_pressure", 0.0),
+                     reference_temperature=p.T0 if heat else 0.0)
         self.model.add_field(FieldSpec("pf", 1, degree, Domain.FRACTURE, unit="Pa"))
         self.model.add(fk.flow_terms(fl))
         self.flows[Domain.FRACTURE] = fl

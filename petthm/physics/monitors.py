@@ -82,11 +82,13 @@ class FractureWells:
 
 # -- balances ----------------------------------------------------------------------------------
 def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=None,
-                      elastic=None) -> list[Conserved]:
+                      elastic=None, water_energy: bool = False) -> list[Conserved]:
     """Fluid volume and (with ``heat`` = (T0, rho_f C_f, (rho C)m)) energy
     balances of theory manual, "Equations: fracture heat".  With ``elastic`` (a
     ``poroelastic.Elastic`` coupled to pm) the matrix's fluid volume gains
-    the Biot term alpha div u (section 5).
+    the Biot term alpha div u (section 5).  ``water_energy``: the stored
+    energy counts the water's content change, rho_f C_f m T with m the
+    fluid volume stored (``-thm_heat_transport upwind``: kernels/transport.StoredWater).
 
     The stored amounts are integrated relative to the initial pressure and
     temperature (constants drop out of the change, and the subtraction of
@@ -121,12 +123,22 @@ def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=No
         def frac_energy(ctx):
             Tf = ctx.value("Tf")[..., 0]
             if frac_flow.aperture is None:
-                return a_ref * rho_c_f * (Tf - T0)
+                e = a_ref * rho_c_f * (Tf - T0)
+                return e + rho_c_f * storage[Domain.FRACTURE](ctx) * Tf if water_energy else e
             a = aperture(ctx)                    # a (T - T0) + T0 (a - a_ref): the change of a T
-            return rho_c_f * (a * (Tf - T0) + T0 * (a - a_ref))
-        out.append(Conserved("energy", ("Tf", "Tm"), {
-            Domain.FRACTURE: frac_energy,
-            Domain.MATRIX: lambda ctx: rho_c_m * (ctx.value("Tm")[..., 0] - T0)}))
+            e = rho_c_f * (a * (Tf - T0) + T0 * (a - a_ref))
+            if water_energy:                     # a (1 + s) T: + a s T
+                e = e + rho_c_f * (storage[Domain.FRACTURE](ctx) - (a - a_ref)) * Tf
+            return e
+
+        def matrix_energy(ctx):
+            Tm = ctx.value("Tm")[..., 0]
+            e = rho_c_m * (Tm - T0)
+            if water_energy and Domain.MATRIX in storage:
+                e = e + rho_c_f * storage[Domain.MATRIX](ctx) * Tm
+            return e
+        out.append(Conserved("energy", ("Tf", "Tm"), {Domain.FRACTURE: frac_energy,
+                                                      Domain.MATRIX: matrix_energy}))
     return out
 
 

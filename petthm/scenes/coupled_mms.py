@@ -192,7 +192,7 @@ class CoupledMMS(Scene):
                         source=frac["Tf"])
         b.matrix_heat(degree, source=sources["Tm"], supg=supg)
         model = b.build()
-        model.add(source_terms(m, sources, frac["Tf_increment"]))
+        model.add(source_terms(m, sources, frac))
         sigma = m.stress_function()
         model.facets += [pe.traction("u", part, partial(_outward_traction, sigma, part))
                          for part in self.sides()]
@@ -215,13 +215,14 @@ def _outward_traction(sigma, part: str, x, t):
     return sign * sigma(x, t)[..., :, axis]
 
 
-def source_terms(m: CoupledSolution, sources: dict, increment) -> tuple[list, list]:
+def source_terms(m: CoupledSolution, sources: dict, frac: dict) -> tuple[list, list]:
     """The manufactured right-hand sides that the flow and heat builders do
     not take (-int w f): f_u on the cells, the face loads h of each half on
     the trace of u that lies in it (the half the fracture normal points into
-    is the + face), and + int w dt rho_f C_f da/dt dTf/dt on the fracture
-    (dt = 1/shift: backward Euler's stored energy, kernels/heat.heat_f0,
-    for the step taken, also after a rejected step)."""
+    is the + face), and on the fracture + int w dt rho_f C_f da/dt dTf/dt and
+    + int w dt da/dt ds/dt (dt = 1/shift: backward Euler's stored energy,
+    kernels/heat.heat_f0, and water content, kernels/flow.flow_f0, for the
+    step taken, also after a rejected step)."""
     def volume(f, ctx):
         v = -f(ctx.x, ctx.t)
         return v if v.ndim == 3 else v[..., None]
@@ -230,10 +231,11 @@ def source_terms(m: CoupledSolution, sources: dict, increment) -> tuple[list, li
         up = (side.sign * ctx.normals[..., -1] > 0)[..., None]           # this face lies above Gamma
         h = {s: m.face_load(s)(ctx.x, ctx.t) for s in HALVES}
         return -np.where(up, h[1], h[-1])
-    def stored_energy_increment(ctx):
+    def step_increment(increment, ctx):
         return (increment(ctx.x, ctx.t) / ctx.shift if ctx.shift > 0 else np.zeros(ctx.shape))[..., None]
     res = [CellResidual("u", partial(volume, sources["u"]), None, region=MATRIX),
-           CellResidual("Tf", stored_energy_increment, None, region=FRACTURE)]
+           CellResidual("Tf", partial(step_increment, frac["Tf_increment"]), None, region=FRACTURE),
+           CellResidual("pf", partial(step_increment, frac["pf_increment"]), None, region=FRACTURE)]
     res += [CellResidual(Trace("u", side), partial(face_load, side), None, region=FRACTURE)
             for side in (Side.PLUS, Side.MINUS)]
     return res, []

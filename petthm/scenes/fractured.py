@@ -173,7 +173,8 @@ def balances_of(b: ModelBuilder, reference_aperture: float, p0: float, heat: boo
     amounts relative to p0 and T0)."""
     p = b.p
     energy = (p.T0, p.fluid_rho_c, p.rho_c) if heat else None
-    return Balances(fracture_balances(b.flows, reference_aperture, p0, energy, b.elastic), worst)
+    water = any(h.upwind for h in b.heats.values())
+    return Balances(fracture_balances(b.flows, reference_aperture, p0, energy, b.elastic, water), worst)
 
 
 def far_sides(width: float, axis: int = 1):

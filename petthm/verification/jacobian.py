@@ -5,15 +5,16 @@ import numpy as np
 from petsc4py import PETSc
 
 
-def _perturbed_state(problem, t: float, shift: float, rng):
+def _perturbed_state(problem, t: float, shift: float, rng, rate: float = 1.0):
     """X (the problem's current state plus a random perturbation, so that
-    nonlinear terms are exercised away from special points), a random Xdot,
-    and the backward-Euler Jacobian J = dF/dX + shift dF/dXdot there."""
+    nonlinear terms are exercised away from special points), a random Xdot
+    of standard deviation ``rate`` (scaled unknowns per second), and the
+    backward-Euler Jacobian J = dF/dX + shift dF/dXdot there."""
     X = problem.X.duplicate()
     problem.X.copy(X)
     X.getArray()[:] += 0.1 * rng.standard_normal(X.getLocalSize())
     Xdot = X.duplicate()
-    Xdot.getArray()[:] = rng.standard_normal(X.getLocalSize())
+    Xdot.getArray()[:] = rate * rng.standard_normal(X.getLocalSize())
     J = problem.create_matrix()
     problem.ijacobian(None, t, X, Xdot, shift, J, J)
     return X, Xdot, J
@@ -50,7 +51,7 @@ def jacobian_fd_error(problem, t: float = 0.0, shift: float = 1.0, eps: float = 
 
 
 def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps=1e-6,
-                             seed: int = 0) -> dict:
+                             seed: int = 0, rate: float = 1.0) -> dict:
     """{(test field, trial field): relative error} of every coupling block, the
     check of ``jacobian_fd_error`` with d restricted to the trial field's
     unknowns and the error measured on the test field's rows (so that a wrong
@@ -61,15 +62,20 @@ def jacobian_fd_block_errors(problem, t: float = 0.0, shift: float = 1.0, eps=1e
     ``eps`` may be a tuple of steps: each block's error is then the smallest
     over them.  A small block in rows with large unrelated terms needs a
     large step (its round-off error grows as 1/step), a block with a kink
-    nearby a small one (truncation); a wrong block is wrong at every step."""
+    nearby a small one (truncation); a wrong block is wrong at every step.
+    ``rate``: the size of the random rates (``_perturbed_state``); rates
+    of unit size with a small ``shift`` describe a step that moved every
+    unknown by 1/shift of its scale, whose increment terms (backward
+    Euler's exact quotients, rate x rate / shift) swamp a small block's rows
+    with round-off."""
     if not np.isscalar(eps):
         out = {}
         for e in eps:
-            for k, v in jacobian_fd_block_errors(problem, t, shift, e, seed).items():
+            for k, v in jacobian_fd_block_errors(problem, t, shift, e, seed, rate).items():
                 out[k] = min(v, out.get(k, np.inf))
         return out
     rng = np.random.default_rng(seed + problem.dm.comm.rank)
-    X, Xdot, J = _perturbed_state(problem, t, shift, rng)
+    X, Xdot, J = _perturbed_state(problem, t, shift, rng, rate)
     names, isets, _ = problem.dm.createFieldDecomposition()
     lo = X.getOwnershipRange()[0]
     rows = {n: iset.getIndices() - lo for n, iset in zip(names, isets, strict=False)}

@@ -25,7 +25,7 @@ as the kernels implement them; the docstrings there):
   the thermo-mechanical heating of section 6);
 * fracture (the stored energy's rate form; backward Euler's quotient
   differs by a term of the step: ``fracture_sources``):
-  g_pf = da/dt + a c_f dpf/dt - a beta_f dTf/dt + div qf + q_L,
+  g_pf = d/dt (a (1 + c_f (pf - p0) - beta_f (Tf - T0))) + div qf + q_L,
   qf = -a^3/(12 mu(Tf)) grad pf, q_L = sum over the halves of q . n_out
   (n_out from Gamma into the half: the leakoff the matrix rows of the
   tied wall nodes carry); g_Tf = rho_f C_f (a dTf/dt + Tf da/dt)
@@ -196,8 +196,8 @@ class CoupledSolution:
         grad_t = lambda f: sp.Matrix([sp.diff(f, xi) for xi in Xt])       # noqa: E731
         div_t = lambda v: sum(sp.diff(v[i], xi) for i, xi in enumerate(Xt))  # noqa: E731
         qf = -a ** 3 / 12 * self.mobility(self.Tf) * grad_t(self.pf)
-        self.g_pf = (sp.diff(a, t) + a * c.c_f * sp.diff(self.pf, t) - a * c.beta_f * sp.diff(self.Tf, t)
-                     + div_t(qf) + q_L)
+        self.content = a * (1 + c.c_f * (self.pf - c.p_ref) - c.beta_f * (self.Tf - c.T_ref))
+        self.g_pf = sp.diff(self.content, t) + div_t(qf) + q_L
         self.g_Tf = (c.rho_c_f * (a * sp.diff(self.Tf, t) + self.Tf * sp.diff(a, t))
                      + div_t(c.rho_c_f * qf * self.Tf - a * c.lam_f * grad_t(self.Tf)) + wall_heat)
 
@@ -265,13 +265,17 @@ class CoupledSolution:
         return {"u": self._halves(self.f_u), "pm": self._halves(self.f_p), "Tm": self._halves(self.f_T)}
 
     def fracture_sources(self) -> dict:
-        """{'pf': g_pf, 'Tf': g_Tf, 'Tf_increment': rho_f C_f da/dt dTf/dt}.
-        Backward Euler's stored energy (a T - a_old T_old)/dt (kernels/heat.py)
-        is rho_f C_f (a dTf/dt + Tf da/dt - dt da/dt dTf/dt) for fields affine
-        in t: the source of a step dt is g_Tf - dt Tf_increment."""
-        sp, t = self.sp, self.t
-        inc = self.c.rho_c_f * sp.diff(self.a, t) * sp.diff(self.Tf, t)
+        """{'pf': g_pf, 'Tf': g_Tf, 'pf_increment': da/dt ds/dt, 'Tf_increment':
+        rho_f C_f da/dt dTf/dt}.  Backward Euler's stored energy
+        (a T - a_old T_old)/dt (kernels/heat.py) is rho_f C_f (a dTf/dt + Tf
+        da/dt - dt da/dt dTf/dt) for fields affine in t: the source of a step dt
+        is g_Tf - dt Tf_increment; likewise the content a (1 + s) of the
+        fracture flow (kernels/flow.py), s = c_f (pf - p0) - beta_f (Tf - T0)."""
+        sp, t, c = self.sp, self.t, self.c
+        inc = c.rho_c_f * sp.diff(self.a, t) * sp.diff(self.Tf, t)
+        sdot = c.c_f * sp.diff(self.pf, t) - c.beta_f * sp.diff(self.Tf, t)
         return {"pf": self._lambdify(self.g_pf), "Tf": self._lambdify(self.g_Tf),
+                "pf_increment": self._lambdify(sp.diff(self.a, t) * sdot),
                 "Tf_increment": self._lambdify(inc)}
 
     def face_load(self, half: int) -> Callable:

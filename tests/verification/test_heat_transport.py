@@ -24,9 +24,9 @@ def _coupled(tmp_path):
                          thm_coupled_mms_state="closed", thm_heat_transport="upwind")
 
 
-def _lauwerier(tmp_path):
+def _lauwerier(tmp_path, exchange):
     return build_problem(tmp_path, "lauwerier", thm_fe_degree=1, thm_fluid_viscosity="water",
-                         thm_fracture_heat_exchange="nusselt", thm_heat_transport="upwind",
+                         thm_fracture_heat_exchange=exchange, thm_heat_transport="upwind",
                          **COARSE_LAUWERIER)
 
 
@@ -35,9 +35,13 @@ def test_upwinding_jacobian_blocks_match_finite_differences(tmp_path):
     print({f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
     assert {("Tm", "pm"), ("Tm", "Tm"), ("Tf", "pf"), ("Tf", "Tf"), ("Tf", "lam"), ("Tf", "u")} <= set(err)
     assert max(err.values()) <= 1e-6
-    err = jacobian_fd_block_errors(_lauwerier(tmp_path / "lauwerier"), t=1e5, shift=1e-4, eps=(1e-6, 1e-4))
-    print({f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
-    assert max(err.values()) <= 1e-6
+    # the rock's capacity lumped, Tm-Tf is the conduction alone: a small linear block in rows of
+    # large terms, whose differences need a large step (their round-off falls as 1/step)
+    for exchange in ("nusselt", "equilibrium"):
+        err = jacobian_fd_block_errors(_lauwerier(tmp_path / exchange, exchange), t=1e5, shift=1e-4,
+                                       eps=(1e-6, 1e-4, 1e-2))
+        print(exchange, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
+        assert max(err.values()) <= 1e-6
 
 
 def _without(problem, region, keep):

@@ -46,9 +46,13 @@ def test_scene3_jacobian_blocks_match_finite_differences(tmp_path, degree):
     """Every block of the Scene 3 operator (Biot u-pm, thermal strain u-Tm,
     leakoff pm-pf through the tie, the deformable aperture pf-lam and pf-u,
     Tm-pm advection, mu(T), the wells) against central differences, each on
-    its own; several steps, the best per block (docs of the Scene 2 test)."""
+    its own; several steps, the best per block (docs of the Scene 2 test).
+    The random rates are those of a step of 1/shift that moved each unknown
+    by about its scale (rates of unit size would mean 1e5 scales: the
+    increment terms of the fracture's water content, rate x rate / shift,
+    then swamp the small pf-Tm block with round-off)."""
     problem = build_problem(tmp_path, "inclined_penny", thm_fe_degree=degree, **COARSE)
-    err = jacobian_fd_block_errors(problem, t=1e5, shift=1e-5, eps=(1e-6, 1e-4, 1e-2, 1.0))
+    err = jacobian_fd_block_errors(problem, t=1e5, shift=1e-5, eps=(1e-6, 1e-4, 1e-2, 1.0), rate=1e-5)
     print(degree, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
     assert set(err) >= COUPLINGS, COUPLINGS - set(err)
     assert max(err.values()) <= 1e-6

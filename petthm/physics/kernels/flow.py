@@ -15,6 +15,13 @@ S = a c_f, B = a beta_f, and grad is the tangential gradient.  Weak form
 
     int w (S pdot - B Tdot) + grad w . M K grad p
 
+A deformable fracture stores the water content a (1 + s) per unit area,
+s = c_f (p - p0) - beta_f (T - T0) (the reference state p0, T0 of the
+flow), and its storage term is backward Euler's exact quotient of that
+content, (a (1 + s) - a_old (1 + s_old)) / dt = adot (1 + s) + a sdot
+- adot sdot dt: the fluid volume balance telescopes from step to step
+(the stored amount of ``monitors.fracture_balances``).
+
 Every Jacobian block is exact (tests check them against finite differences).
 """
 from __future__ import annotations
@@ -44,6 +51,8 @@ class Flow:
     thermal_storage: float = 0.0    # B
     aperture: object | None = None
     source: Callable | None = None   # s(x, t): a volume (area, on the fracture) source, 1/s
+    reference_pressure: float = 0.0      # p0 of a deformable fracture's content a (1 + s)
+    reference_temperature: float = 0.0   # T0 (K) of it
 
 
 # -- helpers ----------------------------------------------------------------------
@@ -94,10 +103,61 @@ def storage_rate(fl: Flow, ctx):
     return r
 
 
+def increment_product(ctx, adot, sdot):
+    """da ds / dt = adot sdot / shift: what a sdot + s adot at the new time
+    exceeds the backward-Euler quotient (a s - a_old s_old) / dt by (0 without a step)."""
+    return adot * sdot / ctx.shift if ctx.shift > 0 else np.zeros_like(adot)
+
+
+def compressed_content(fl: Flow, ctx):
+    """(s, sdot) of a deformable fracture's content a (1 + s) (the module docstring), (nc, nq)."""
+    s = fl.storage * (ctx.value(fl.p)[..., 0] - fl.reference_pressure)
+    sdot = fl.storage * ctx.dot(fl.p)[..., 0]
+    if fl.T is not None and fl.thermal_storage:
+        s = s - fl.thermal_storage * (ctx.value(fl.T)[..., 0] - fl.reference_temperature)
+        sdot = sdot - fl.thermal_storage * ctx.dot(fl.T)[..., 0]
+    return s, sdot
+
+
+def content_rate_beyond_storage(fl: Flow, ctx):
+    """adot s: what the rate of a deformable fracture's content d(a (1 + s))/dt
+    = adot + a sdot + adot s has beyond adot and the storage rate a sdot (nc, nq)."""
+    return aperture_state(fl, ctx).adot * compressed_content(fl, ctx)[0]
+
+
+def water_content(fl: Flow, ctx):
+    """(m, dm/dp, dm/dT, dm/da) at the quadrature points: the water a region
+    stores per unit volume (area), whose backward-Euler rate is the storage
+    term of ``flow_f0`` (without the source).  Rigid rock or fracture: the
+    change S (p - p0) - B (T - T0) from the reference state; a deformable
+    fracture: the whole content a (1 + s) (dm/da = 1 + s; else dm/da is None)."""
+    if fl.aperture is None:
+        m = fl.storage * (ctx.value(fl.p)[..., 0] - fl.reference_pressure)
+        dT = -fl.thermal_storage if fl.T is not None else 0.0
+        if fl.T is not None and fl.thermal_storage:
+            m = m - fl.thermal_storage * (ctx.value(fl.T)[..., 0] - fl.reference_temperature)
+        return m, fl.storage, dT, None
+    a = aperture_state(fl, ctx).a
+    s, _ = compressed_content(fl, ctx)
+    dT = -a * fl.thermal_storage if fl.T is not None else 0.0
+    return a * (1.0 + s), a * fl.storage, dT, 1.0 + s
+
+
+def water_content_rate(fl: Flow, ctx):
+    """The storage term of ``flow_f0`` without the source: the backward-Euler
+    rate of ``water_content`` (nc, nq)."""
+    r = flow_f0(fl, ctx)[..., 0]
+    if fl.source is not None:
+        r = r + np.broadcast_to(fl.source(ctx.x, ctx.t), ctx.shape)
+    return r
+
+
 def flow_f0(fl: Flow, ctx):
     r = storage_rate(fl, ctx)
     if fl.aperture is not None:
-        r = r + aperture_state(fl, ctx).adot
+        adot = aperture_state(fl, ctx).adot
+        s, sdot = compressed_content(fl, ctx)
+        r = r + adot * (1.0 + s) - increment_product(ctx, adot, sdot)
     return r[..., None]
 
 
@@ -129,11 +189,9 @@ def flow_g2_pT(fl: Flow, ctx):
 
 
 def flow_s0_aperture(fl: Flow, ctx):
-    """d f0/d a (with da/dt): shift + storage pdot - thermal_storage Tdot."""
-    s = ctx.shift + fl.storage * ctx.dot(fl.p)[..., 0]
-    if fl.T is not None and fl.thermal_storage:
-        s = s - fl.thermal_storage * ctx.dot(fl.T)[..., 0]
-    return s
+    """d f0/d a (with da/dt = shift da): shift (1 + s) (the sdot of a sdot
+    cancels against that of -adot sdot / shift)."""
+    return ctx.shift * (1.0 + compressed_content(fl, ctx)[0])
 
 
 def flow_s1_aperture(fl: Flow, ctx):

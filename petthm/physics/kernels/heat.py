@@ -70,13 +70,16 @@ from petthm.physics.kernels.flow import (
     Flow,
     _storages,
     aperture_state,
+    compressed_content,
+    content_rate_beyond_storage,
     g0_block,
+    increment_product,
     mobility,
     permeability_grad_p,
     storage_rate,
     unit_darcy,
 )
-from petthm.physics.kernels.transport import Upwinding, upwinding_terms
+from petthm.physics.kernels.transport import StoredWater, Upwinding, stored_water_terms, upwinding_terms
 from petthm.physics.kernels.wallflux import SIDES, WallConduction, supg_g3, wall_flux
 
 #: f(x (nc, nq, d), t) -> array broadcastable to the quadrature points
@@ -180,6 +183,8 @@ class _HeatPoint:
                 R = R - wall_flux(h.wall, ctx)
             if h.flow is not None and h.supg:      # T div b = -rho_f C_f T m (the module docstring)
                 self.mass = storage_rate(h.flow, ctx)
+                if self.ap is not None:
+                    self.mass = self.mass + content_rate_beyond_storage(h.flow, ctx)
                 if h.biot:
                     self.mass = self.mass + h.biot[1] * np.trace(ctx.grad_dot(h.biot[0]), axis1=2, axis2=3)
                 R = R - h.fluid_rho_c * self.Tv * self.mass
@@ -245,12 +250,6 @@ def heat_f0_capacity(h: Heat, ctx):
     return stored_energy_rate(h, ctx)[..., None]
 
 
-def increment_product(ctx, adot, Tdot):
-    """da dT / dt = adot Tdot / shift: what a Tdot + T adot at the new time
-    exceeds the backward-Euler quotient (a T - a_old T_old) / dt by (0 without a step)."""
-    return adot * Tdot / ctx.shift if ctx.shift > 0 else np.zeros_like(adot)
-
-
 def stored_energy_rate(h: Heat, ctx):
     """C dT/dt, or C d(aT)/dt on a deformable fracture (``heat_f0``), (nc, nq)."""
     ap = aperture_state(h, ctx)
@@ -307,14 +306,19 @@ def _dE_dT(h: Heat, hp: _HeatPoint, ctx):
     fl = h.flow
     if fl.T == h.T and fl.thermal_storage:
         d = d + h.fluid_rho_c * hp.Tv * _storages(fl, ctx)[1] * ctx.shift
+        if hp.ap is not None:                 # adot s of a deformable fracture's content
+            d = d + h.fluid_rho_c * hp.Tv * hp.ap.adot * fl.thermal_storage
     return d
 
 
 def heat_g2_Tp(h: Heat, ctx):
-    """d(tau R b)/dp through E = -rho_f C_f T S pdot: tau b (-rho_f C_f T S shift)."""
+    """d(tau R b)/dp through E = -rho_f C_f T S pdot: tau b (-rho_f C_f T S shift)
+    (and through adot s on a deformable fracture: + adot c_f)."""
     hp = heat_point(h, ctx)
-    S = _storages(h.flow, ctx)[0]
-    return ((hp.tau * -h.fluid_rho_c * hp.Tv * S * ctx.shift)[..., None] * hp.b)[:, :, None, :, None]
+    dm = _storages(h.flow, ctx)[0] * ctx.shift
+    if hp.ap is not None:
+        dm = dm + hp.ap.adot * h.flow.storage
+    return ((hp.tau * -h.fluid_rho_c * hp.Tv * dm)[..., None] * hp.b)[:, :, None, :, None]
 
 
 def heat_g3_Tu(h: Heat, ctx):
@@ -377,9 +381,8 @@ def heat_s1_aperture(h: Heat, ctx):
                 dR = dR - h.conductivity * hp.lapT
             if hp.conservative:       # E = -rho_f C_f T a (storage pdot - thermal_storage Tdot)
                 fl = h.flow
-                m1 = fl.storage * ctx.dot(fl.p)[..., 0]
-                if fl.T is not None and fl.thermal_storage:
-                    m1 = m1 - fl.thermal_storage * ctx.dot(fl.T)[..., 0]
+                s_, sdot = compressed_content(fl, ctx)
+                m1 = sdot + ctx.shift * s_                  # d(a sdot + adot s)/da
                 dR = dR - h.fluid_rho_c * hp.Tv * m1
             dtau = -hp.tau ** 3 * (np.einsum("cqa,cqa->cq", hp.D, db) + hp.B1 * hp.L * h.conductivity)
             s = s + (dtau * hp.R + hp.tau * dR)[..., None] * hp.b + (hp.tau * hp.R)[..., None] * db
@@ -408,7 +411,9 @@ def heat_terms(h: Heat) -> tuple[list, list]:
     hh = h if advect else replace(h, fluid_rho_c=0.0, flow=None, velocity=None, supg=False)
     region, lumped = Region(h.region), Region(h.region, lumped=True)
     res = [CellResidual(h.T, partial(heat_f0, hh), partial(heat_f1, hh), region=region)]
-    if h.lumped:
+    water = h.upwind and h.flow is not None
+    capacity = h.lumped and not (water and h.aperture is not None)   # else the content a (1 + s)
+    if capacity:
         res.append(CellResidual(h.T, partial(heat_f0_capacity, hh), None, region=lumped))
         jac = [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh), region=lumped)]
     else:
@@ -429,10 +434,13 @@ def heat_terms(h: Heat) -> tuple[list, list]:
     if h.aperture is not None:
         s0 = _no_aperture_term if h.lumped else partial(heat_s0_aperture, hh)
         jac += h.aperture.jacobians(h.T, s0, partial(heat_s1_aperture, hh))
-        if h.lumped:
+        if capacity:
             jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), None, lumped)
     if h.upwind:
         r, j = upwinding_terms(Upwinding(hh, heat_point))
+        res, jac = res + r, jac + j
+    if water:
+        r, j = stored_water_terms(StoredWater(hh, h.flow, h.biot))
         res, jac = res + r, jac + j
     return res, jac
 

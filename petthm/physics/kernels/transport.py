@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from petthm.discretisation.model import CellJacobian, CellResidual, Region
+from petthm.physics.kernels.flow import water_content, water_content_rate
 
 
 @dataclass(frozen=True)
@@ -137,4 +138,103 @@ def upwinding_terms(u: Upwinding) -> tuple[list, list]:
         jac.append(CellJacobian(h.T, h.flow.p, region=region, element=lambda ctx: upwinding_Tp(u, ctx)))
     if h.aperture is not None:
         jac += h.aperture.element_jacobians(h.T, lambda ctx: upwinding_aperture(u, ctx), region)
+    return res, jac
+
+
+# -- the energy of the stored water ------------------------------------------------------
+@dataclass(frozen=True)
+class StoredWater:
+    """The energy rho_f C_f m T of the water a region stores, m the flow's
+    water content (``flow.water_content``), in nodal form (theory manual,
+    "Discrete bounds")::
+
+        r_i += rho_f C_f (m_i dT_i/dt + mdot_i T_i - mdot_i dT_i/dt / shift),
+        m_i = int phi_i m,   mdot_i = int phi_i mdot,
+
+    backward Euler's exact quotient of rho_f C_f m_i T_i (the energy
+    balance telescopes).  mdot_i is the storage term of the flow's row i
+    (the same quadrature rule), so that the Galerkin advection's row sum,
+    which the flow's mass balance makes -rho_f C_f mdot_i T_i (the water
+    stored, counted as heat in kelvin), cancels against mdot_i T_i: no
+    source proportional to the temperature remains, and the upwinded
+    operator is local-extremum-diminishing.  ``biot``: (u, alpha), the
+    water the rock's volume change alpha div u stores; ``aperture``: a
+    deformable fracture, whose content a (1 + s) replaces its capacity a rho_f C_f."""
+    heat: object
+    flow: object
+    biot: tuple = ()
+
+
+class _Water:
+    def __init__(self, w: StoredWater, ctx):
+        h, fl = w.heat, w.flow
+        self.Wphi = ctx.weights[:, :, None] * ctx.basis(h.T)[None]                 # (nc, nq, nb)
+        m, self.dm_dp, self.dm_dT, self.dm_da = water_content(fl, ctx)
+        mdot = water_content_rate(fl, ctx)
+        if w.biot:
+            u, alpha = w.biot
+            m = m + alpha * np.trace(ctx.grad(u), axis1=2, axis2=3)
+            mdot = mdot + alpha * np.trace(ctx.grad_dot(u), axis1=2, axis2=3)
+        self.m = np.einsum("cqi,cq->ci", self.Wphi, np.broadcast_to(m, ctx.shape))
+        self.mdot = np.einsum("cqi,cq->ci", self.Wphi, np.broadcast_to(mdot, ctx.shape))
+        self.T = ctx.nodal(h.T)[..., 0]
+        self.Tdot = ctx.nodal_rate(h.T)[..., 0]
+        self.c = h.fluid_rho_c
+
+    def value_block(self, ctx, dm, trial):
+        """c shift T_i int phi_i dm psi_k: the Jacobian through m's dependence dm on a trial value."""
+        B = np.einsum("cqi,cq,qk->cik", self.Wphi, np.broadcast_to(dm, ctx.shape), ctx.basis(trial))
+        return self.c * ctx.shift * self.T[:, :, None] * B
+
+
+def _water(w: StoredWater, ctx) -> _Water:
+    return ctx.cached(("stored water", id(w)), lambda: _Water(w, ctx))
+
+
+def stored_water_residual(w: StoredWater, ctx):
+    e = _water(w, ctx)
+    inc = e.mdot * e.Tdot / ctx.shift if ctx.shift > 0 else 0.0
+    return (e.c * (e.m * e.Tdot + e.mdot * e.T - inc))[..., None]
+
+
+def stored_water_TT(w: StoredWater, ctx):
+    """d/dT_k of c (m_i T_i)^. : c shift (m_i delta_ik + T_i dm_i/dT_k)."""
+    e = _water(w, ctx)
+    nc, _, nb = e.Wphi.shape
+    A = e.value_block(ctx, e.dm_dT, w.heat.T) if w.flow.T == w.heat.T else np.zeros((nc, nb, nb))
+    idx = np.arange(A.shape[1])
+    A[:, idx, idx] += e.c * ctx.shift * e.m
+    return A[:, None, None]
+
+
+def stored_water_Tp(w: StoredWater, ctx):
+    e = _water(w, ctx)
+    return e.value_block(ctx, e.dm_dp, w.flow.p)[:, None, None]
+
+
+def stored_water_Tu(w: StoredWater, ctx):
+    """Through alpha div u: c shift T_i int phi_i alpha d(psi_k)/dx_j, (nc, 1, d, nb, nbu)."""
+    e = _water(w, ctx)
+    u, alpha = w.biot
+    G = ctx.basis_gradients_at_points(u)                                           # (nc, nq|1, nbu, d)
+    B = np.einsum("cqi,cqka->caik", e.Wphi, np.broadcast_to(G, (G.shape[0], e.Wphi.shape[1]) + G.shape[2:]))
+    return (e.c * ctx.shift * alpha * e.T[:, None, :, None] * B)[:, None]
+
+
+def stored_water_aperture(w: StoredWater, ctx):
+    """d r_i / d a_q (nc, nb, nq): c shift T_i W_q phi_i(q) (1 + s_q)."""
+    e = _water(w, ctx)
+    return e.c * ctx.shift * e.T[:, :, None] * (e.Wphi * e.dm_da[:, :, None]).transpose(0, 2, 1)
+
+
+def stored_water_terms(w: StoredWater) -> tuple[list, list]:
+    h, fl = w.heat, w.flow
+    region = Region(h.region)
+    res = [CellResidual(h.T, None, None, region=region, element=lambda ctx: stored_water_residual(w, ctx))]
+    jac = [CellJacobian(h.T, h.T, region=region, element=lambda ctx: stored_water_TT(w, ctx)),
+           CellJacobian(h.T, fl.p, region=region, element=lambda ctx: stored_water_Tp(w, ctx))]
+    if w.biot:
+        jac.append(CellJacobian(h.T, w.biot[0], region=region, element=lambda ctx: stored_water_Tu(w, ctx)))
+    if fl.aperture is not None:
+        jac += fl.aperture.element_jacobians(h.T, lambda ctx: stored_water_aperture(w, ctx), region)
     return res, jac
