@@ -47,6 +47,7 @@ from petthm.discretisation.model import (
 from petthm.errors import InputError
 from petthm.params import CELSIUS
 from petthm.physics.kernels import contact as ct
+from petthm.physics.kernels import exchange as xk
 from petthm.physics.kernels import flow as fk
 from petthm.physics.kernels import friction as fr
 from petthm.physics.kernels import heat as hk
@@ -250,14 +251,14 @@ class ModelBuilder:
         ex = p.fracture_heat_exchange
         hw = ex.coefficient(reference_aperture, p.fluid_conductivity)
         if hw is not None and self.aperture is not None and ex.mode == "nusselt":
-            hw = hk.ApertureExchange(NUSSELT * p.fluid_conductivity / 2, self.aperture)
+            hw = xk.ApertureExchange(NUSSELT * p.fluid_conductivity / 2, self.aperture)
         if hw is None:
             self.model.ties["Tm"] = "Tf"
         else:
             if Domain.MATRIX in self.flows:
                 raise InputError("option -thm_fracture_heat_exchange: only 'equilibrium' is implemented "
                                  "with a permeable matrix (the heat carried by leakoff needs the wall flux)")
-            self.model.add(hk.exchange_terms("Tf", traces("Tm"), hw, lumped=lumped))
+            self.model.add(xk.exchange_terms("Tf", traces("Tm"), hw, lumped=lumped))
         h = hk.Heat(Domain.FRACTURE, "Tf", a * p.fluid_rho_c, a * p.fluid_conductivity, p.fluid_rho_c,
                     self.flows[Domain.FRACTURE], degree=degree, aperture=self.aperture,
                     source=source, **self._transport(degree, True, supg, False))

@@ -136,7 +136,7 @@ class Run:
             path = os.path.join(self.outdir, "mesh.msh")
             self.claim(["mesh.msh"])
             size = run.mesh_size or scene.time.mesh_size
-            from petthm.mesh.generate import cell_limit
+            from petthm.mesh.limits import cell_limit
 
             def generate():
                 with cell_limit(run.max_cells):

@@ -296,7 +296,7 @@ def test_fewest_cells_is_a_lower_bound(dim, size):
     tetrahedra at 0.25)."""
     import gmsh
 
-    from petthm.mesh.generate import fewest_cells
+    from petthm.mesh.limits import fewest_cells
     gmsh.initialize(["gmsh"], readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)

@@ -211,9 +211,9 @@ class Aperture:
         """Blocks d(residual of ``test``)/d(lam, u+, u-) through the aperture.
 
         ``s0(ctx)`` (nc, nq) and ``s1(ctx)`` (nc, nq, d) are the derivatives of
-        the residual's f0 and f1 with respect to a, where a and da/dt change
-        together (d(da/dt)/d(unknown) = shift da/d(unknown), since ac' and H
-        are piecewise constant).  ``s1`` None: f1 does not depend on a.
+        the residual's f0 and f1 with respect to a (None: that one does not
+        depend on a), where a and da/dt change together (d(da/dt)/d(unknown)
+        = shift da/d(unknown), since ac' and H are piecewise constant).
         ``region``: where the term is integrated (default: the fracture)."""
         m = self.mech
 
@@ -229,11 +229,12 @@ class Aperture:
         def g2_u(sign, ctx):
             return sign * (self.state(ctx).H[..., None] * s1(ctx))[:, :, None, :, None] * \
                 ctx.normals[:, :, None, None, :]
-        has1 = s1 is not None
+        has0, has1 = s0 is not None, s1 is not None
         region = region or m.region
-        out = [CellJacobian(test, m.lam, g0=g0_lam, g2=g2_lam if has1 else None, region=region)]
+        out = [CellJacobian(test, m.lam, g0=g0_lam if has0 else None, g2=g2_lam if has1 else None,
+                            region=region)]
         for side in SIDES:
-            out.append(CellJacobian(test, m.trace(side), g0=partial(g0_u, side.sign),
+            out.append(CellJacobian(test, m.trace(side), g0=partial(g0_u, side.sign) if has0 else None,
                                     g2=partial(g2_u, side.sign) if has1 else None, region=region))
         return out
 

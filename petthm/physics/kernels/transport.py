@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from petthm.discretisation.model import CellJacobian, CellResidual, Region
-from petthm.physics.kernels.flow import water_content, water_content_rate
+from petthm.physics.kernels.flow import increment_product, water_content, water_content_rate
 
 
 @dataclass(frozen=True)
@@ -193,8 +193,7 @@ def _water(w: StoredWater, ctx) -> _Water:
 
 def stored_water_residual(w: StoredWater, ctx):
     e = _water(w, ctx)
-    inc = e.mdot * e.Tdot / ctx.shift if ctx.shift > 0 else 0.0
-    return (e.c * (e.m * e.Tdot + e.mdot * e.T - inc))[..., None]
+    return (e.c * (e.m * e.Tdot + e.mdot * e.T - increment_product(ctx, e.mdot, e.Tdot)))[..., None]
 
 
 def stored_water_TT(w: StoredWater, ctx):
