@@ -260,6 +260,7 @@ class Assembler:
         derivative; ``shift``: 1/dt of the step (a kernel that needs the
         increment x - x_old = x_dot / shift, the friction law)."""
         out = np.zeros(self.disc.nlocal)
+        self._prepare(self.model.residuals, xl, xdl, t, shift)
         for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)
             W = self.W[cells]
@@ -286,6 +287,14 @@ class Assembler:
                 r = tab.phi.T @ (fb.weights[:, :, None] * ft.f0(ctx))
                 self._scatter(out, ft.field, fb.cells, r)
         return out
+
+    def _prepare(self, terms, xl, xdl, t, shift):
+        """Each distinct ``prepare`` of the terms, once, before the cells."""
+        done = set()
+        for term in terms:
+            if term.prepare is not None and id(term.prepare) not in done:
+                done.add(id(term.prepare))
+                term.prepare(self, xl, xdl, t, shift)
 
     def _constant_gradient_flux(self, name, cells, W, f1):
         """sum_q W grad phi_i . f1 for test functions with gradients constant
@@ -315,6 +324,7 @@ class Assembler:
         (the buffer of the last call)."""
         keep_constant = keep_constant and out is not None
         sums = self.sums
+        self._prepare(self.model.jacobians, xl, xdl, t, shift)
         for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xdl, t, shift)        # shared by the blocks of the chunk
             for jb, slab in zip(self.model.jacobians, sums.slabs, strict=False):

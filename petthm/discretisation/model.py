@@ -79,6 +79,10 @@ class CellResidual:
     f1: Kernel | None = None
     region: Region = MATRIX
     element: Kernel | None = None
+    #: called once per assembly, before the cells (``prepare(asm, xl, xdl, t,
+    #: shift)``), by a term whose element kernel needs data gathered over the
+    #: whole region first (the nodal limiter of ``kernels/limiter.py``)
+    prepare: Callable | None = None
 
 
 @dataclass(frozen=True)
@@ -94,6 +98,7 @@ class CellJacobian:
     region: Region = MATRIX
     #: each element's matrix (nc, ncomp_test, ncomp_trial, nb_test, nb_trial), added as it is
     element: Kernel | None = None
+    prepare: Callable | None = None           # as CellResidual.prepare
     #: the block depends on neither the state, the time nor the shift (a
     #: linear term with constant coefficients, e.g. elasticity): ``Problem``
     #: assembles it once and keeps its values until the residual scaling changes

@@ -271,15 +271,17 @@ class ModelBuilder:
     def _transport(self, degree: int, advect: bool, supg: bool, lumped: bool) -> dict:
         """The heat advection's discretisation (``-thm_heat_transport``; a
         scene that passes ``supg=False`` asks for Galerkin): SUPG, or
-        algebraic upwinding (kernels/transport.py) with the capacity lumped
+        algebraic upwinding (kernels/transport.py), flux-corrected with
+        ``limited`` (kernels/limiter.py), with the capacity lumped
         (with or without advection: a consistent capacity over- and
         undershoots next to a sudden change of the wall temperature)."""
         scheme = getattr(self.p, "heat_transport", "supg") if supg else "galerkin"
-        if scheme == "upwind" and degree != 1:
-            raise InputError(f"option -thm_heat_transport upwind: P1 temperatures only (this run has "
+        if scheme in ("upwind", "limited") and degree != 1:
+            raise InputError(f"option -thm_heat_transport {scheme}: P1 temperatures only (this run has "
                              f"P{degree}: -thm_fe_degree 1, or -thm_heat_transport supg)")
-        if scheme == "upwind":
-            return {"supg": False, "lumped": True, "upwind": advect}
+        if scheme in ("upwind", "limited"):
+            limited = advect and scheme == "limited"
+            return {"supg": False, "lumped": True, "upwind": advect, "limited": limited}
         return {"supg": scheme == "supg", "lumped": lumped}
 
     def wells(self, terms: list[PointTerm]) -> None:

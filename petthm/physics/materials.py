@@ -180,9 +180,11 @@ DECLARED = {
                                            kind=DISCRETISATION),
     "heat_transport": param("supg", "-", "discretisation of the heat advection of P1 temperatures: supg "
                             "(streamline upwind Petrov-Galerkin), upwind (algebraic upwinding with the "
-                            "capacity lumped: bound-preserving, first order where advection dominates) or "
-                            "galerkin (no stabilisation); theory manual, discrete bounds",
-                            choices=("supg", "upwind", "galerkin"), kind=DISCRETISATION),
+                            "capacity lumped: bound-preserving, first order where advection dominates), "
+                            "limited (the upwinding flux-corrected: bound-preserving, Galerkin where the "
+                            "temperature is smooth) or galerkin (no stabilisation); theory manual, "
+                            "discrete bounds",
+                            choices=("supg", "upwind", "limited", "galerkin"), kind=DISCRETISATION),
     # state and wells (sections 2, 9)
     "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0", kind=PHYSICS),
     "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0", kind=PHYSICS),

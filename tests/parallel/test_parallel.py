@@ -22,6 +22,7 @@ def final_field(outdir, name="Tm", stem="fields"):
     ("heat_mms", ("-thm_mms_dim", 2, "-thm_mesh_size", 0.0625)),
     ("heat_mms", ("-thm_mms_dim", 3, "-thm_mesh_size", 0.25, "-thm_fe_degree", 1)),
     ("heat_advection", ("-thm_final_time", 2e6)),
+    ("heat_advection", ("-thm_final_time", 2e6, "-thm_fe_degree", 1, "-thm_heat_transport", "limited")),
 ])
 def test_parallel_matches_serial(tmp_path, scene, opts):
     ref = None

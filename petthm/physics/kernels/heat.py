@@ -79,6 +79,7 @@ from petthm.physics.kernels.flow import (
     storage_rate,
     unit_darcy,
 )
+from petthm.physics.kernels.limiter import FluxLimiter
 from petthm.physics.kernels.transport import StoredWater, Upwinding, stored_water_terms, upwinding_terms
 from petthm.physics.kernels.wallflux import SIDES, WallConduction, supg_g3, wall_flux
 
@@ -116,6 +117,7 @@ class Heat:
     biot: tuple = ()                # (u field, alpha): alpha d(div u)/dt in the flow's mass balance (SUPG)
     wall: WallConduction | None = None      # the rock's wall conduction in R (kernels/wallflux.py)
     upwind: bool = False            # algebraic upwinding (kernels/transport.py) instead of SUPG
+    limited: bool = False           # the upwinding's diffusion flux-corrected (kernels/limiter.py)
 
     @property
     def advects(self) -> bool:
@@ -380,6 +382,8 @@ def _check_heat(h: Heat) -> None:
         raise ValueError("a deformable fracture takes a scalar conductivity and the flow's velocity")
     if h.lumped and h.degree != 1:
         raise ValueError("a lumped capacity needs P1")
+    if h.limited and not h.upwind:
+        raise ValueError("the flux limiter corrects the algebraic upwinding")
     if h.upwind and (h.supg or not h.lumped or not h.advects):
         raise ValueError("algebraic upwinding replaces SUPG, with the capacity lumped, on advected heat")
 
@@ -417,7 +421,11 @@ def heat_terms(h: Heat) -> tuple[list, list]:
         if capacity:
             jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), None, lumped)
     if h.upwind:
-        r, j = upwinding_terms(Upwinding(hh, heat_point))
+        limiter = FluxLimiter() if h.limited else None
+        u = Upwinding(hh, heat_point, limiter)
+        if limiter is not None:
+            limiter.bind(u)
+        r, j = upwinding_terms(u)
         res, jac = res + r, jac + j
     if water:
         r, j = stored_water_terms(StoredWater(hh, h.flow, h.biot))

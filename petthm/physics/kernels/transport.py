@@ -33,7 +33,7 @@ aperture (b ~ a^3) and through it to lam and u+-.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -45,15 +45,20 @@ from petthm.physics.kernels.flow import increment_product, water_content, water_
 class Upwinding:
     """The discrete upwinding of one region's heat transport (``heat.Heat``,
     P1, advected); ``point(heat, ctx)`` gives its data at the quadrature
-    points (``heat.heat_point``: the Darcy flux b, the mobility, the aperture)."""
+    points (``heat.heat_point``: the Darcy flux b, the mobility, the aperture).
+    ``limiter``: the flux correction that gives back the diffusion d_ij where
+    the solution is smooth (``kernels/limiter.py``; None: plain upwinding)."""
     heat: object
     point: Callable
+    limiter: object | None = None
 
 
 class _Element:
-    """k, d and what their derivatives need, on a batch of cells."""
+    """k, d and what their derivatives need, on a batch of cells; ``limited``:
+    d_ij times the limiter's 1 - alpha_ij of the cells (held fixed in the
+    derivatives: kernels/limiter.py)."""
 
-    def __init__(self, u: Upwinding, ctx):
+    def __init__(self, u: Upwinding, ctx, limited: bool = True):
         h = u.heat
         hp = u.point(h, ctx)
         self.hp = hp
@@ -67,19 +72,32 @@ class _Element:
         self.s2 = (Kt > K) & (Kt > 0) & off                   # d_ij = k_ji
         self.D = np.where(self.s1, K, 0.0) + np.where(self.s2, Kt, 0.0)
         T = ctx.nodal(h.T)[..., 0]
+        self.T = T
         self.dT = T[:, :, None] - T[:, None, :]                                # T_i - T_j
+        self.keep = None
+        if limited and u.limiter is not None:
+            self.keep = ctx.cell_values(u.limiter.keep)                        # 1 - alpha_ij
+            self.D = self.D * self.keep
 
     def chain(self, dK):
         """sum_j (T_i - T_j) dd_ij/dx_k for dk_ij/dx_k = dK[c, i, j, k...]."""
         dKt = np.swapaxes(dK, 1, 2)
         sel = self.s1.reshape(self.s1.shape + (1,) * (dK.ndim - 3))
         sel2 = self.s2.reshape(sel.shape)
-        dT = self.dT.reshape(sel.shape)
+        dT = self.dT if self.keep is None else self.dT * self.keep
+        dT = dT.reshape(sel.shape)
         return (dT * (np.where(sel, dK, 0.0) + np.where(sel2, dKt, 0.0))).sum(axis=2)
 
 
 def _element(u: Upwinding, ctx) -> _Element:
     return ctx.cached(("upwinding", id(u)), lambda: _Element(u, ctx))
+
+
+def upwinding_diffusion(u: Upwinding, ctx):
+    """The upwinding's d_ij and T_i - T_j on the cells, unlimited (nc, nb, nb):
+    what the limiter corrects."""
+    e = _Element(u, ctx, limited=False)
+    return e.D, e.dT, e.T
 
 
 def upwinding_residual(u: Upwinding, ctx):
@@ -132,12 +150,16 @@ def upwinding_terms(u: Upwinding) -> tuple[list, list]:
     if h.degree != 1:
         raise ValueError("algebraic upwinding needs P1 temperatures (and the P1 pressure that advects them)")
     region = Region(h.region)
-    res = [CellResidual(h.T, None, None, region=region, element=lambda ctx: upwinding_residual(u, ctx))]
-    jac = [CellJacobian(h.T, h.T, region=region, element=lambda ctx: upwinding_TT(u, ctx))]
+    pre = u.limiter
+    res = [CellResidual(h.T, None, None, region=region, element=lambda ctx: upwinding_residual(u, ctx),
+                        prepare=pre)]
+    jac = [CellJacobian(h.T, h.T, region=region, element=lambda ctx: upwinding_TT(u, ctx), prepare=pre)]
     if h.flow is not None:
-        jac.append(CellJacobian(h.T, h.flow.p, region=region, element=lambda ctx: upwinding_Tp(u, ctx)))
+        jac.append(CellJacobian(h.T, h.flow.p, region=region, element=lambda ctx: upwinding_Tp(u, ctx),
+                                prepare=pre))
     if h.aperture is not None:
-        jac += h.aperture.element_jacobians(h.T, lambda ctx: upwinding_aperture(u, ctx), region)
+        jac += [replace(j, prepare=pre) for j in
+                h.aperture.element_jacobians(h.T, lambda ctx: upwinding_aperture(u, ctx), region)]
     return res, jac
 
 

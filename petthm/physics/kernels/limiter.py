@@ -1,0 +1,175 @@
+"""The flux limiter of ``-thm_heat_transport limited``: algebraic flux
+correction of the upwinded heat transport (theory manual, "Discrete bounds").
+
+The upwinding (``kernels/transport.py``) adds to row i the diffusion
+sum_j d_ij (T_i - T_j).  Taking it away again gives back the Galerkin
+scheme; each element pair (i, j) carries the anti-diffusive flux
+
+    g_ij = d_ij (T_i - T_j) = -g_ji
+
+that does so.  The limited scheme gives back alpha_ij g_ij, alpha_ij =
+alpha_ji in [0, 1] (the residual keeps (1 - alpha_ij) d_ij (T_i - T_j)),
+with Zalesak's nodal factors in the form of stationary algebraic flux
+correction (Kuzmin, "Algebraic flux correction I", 2012; Barrenechea,
+John and Knobloch, 2017):
+
+    P_i+ = sum_e,j max(0, g_ij),         P_i- = sum_e,j min(0, g_ij),
+    Q_i+ = gamma q_i (T_i^max - T_i),    Q_i- = gamma q_i (T_i^min - T_i),
+    q_i = sum_e,j d_ij,   T_i^max, T_i^min: the extremes of T over the
+    elements of node i (the node itself included),
+    R_i+- = min(1, Q_i+- / P_i+-) = min(1, gamma |T_i^max,min - T_i| / max(|P_i+-| / q_i, dT0)),
+    dT0 = 1e-6 K (|P| / q = 0 where q_i = 0),
+    alpha_ij = min(R_i+, R_i-, R_j+, R_j-).
+
+Zalesak's alpha takes R_i+ and R_j- where g_ij > 0 (R_i- and R_j+
+otherwise); here the limiter is evaluated at the start of the step (below)
+and the sign of the step's own flux is not known, so alpha is the smaller
+of both: whichever way the flux goes, the fluxes into node i add at most
+Q_i+ and take away at most |Q_i-|.  A local extremum has Q_i+ = 0 or Q_i-
+= 0 and keeps the upwinded row (an M-matrix row), so no new extremum
+forms; where T is smooth and away from its extremes R = 1 and the scheme
+is the Galerkin one, second order.  ``gamma``: how much of the bound room each
+node offers, relative to its upwinding diffusion q_i; with gamma >= 1 a
+linear T is not limited in the interior of a uniform 1D mesh (P_i = q_i
+|dT| / 2 there).
+
+The limiter is evaluated at the state at the start of the step (backward
+Euler's x - x_dot / shift), so that within a step alpha is a constant and
+the step's equations are those of a fixed linear combination of the
+upwinded and the Galerkin operators: Newton keeps its quadratic
+convergence and the Jacobian is exact (with alpha from the state being
+solved for, alpha switches between Newton iterates, which then cycle;
+theory manual, "Discrete bounds").  The bounds are those of the step's
+start: a new extremum can form only within a step, by what the flux
+correction of that step adds beyond them, which the bounds monitor
+(``run/ranges.py``) measures on every step.
+
+The sums run over all cells of the region: a pass before the assembly
+(``__call__``, the assembly's ``prepare`` hook), the nodal sums and
+extremes completed across processes through the mesh's section star
+forest, so that a run gives the same alpha on any number of ranks.
+Where a node has no room (Q = 0: its temperature is an extreme of its
+neighbours', as everywhere in a uniform start), R = 0 even without a flux
+to limit (P = 0): the flux that the step itself creates there is upwinded;
+the floor dT0 keeps R continuous there, and where the state has no flow
+(q_i = 0).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from petthm.discretisation.context import CellContext
+from petthm.physics.kernels.transport import Upwinding, upwinding_diffusion
+
+#: the limiter's default bound room (module docstring)
+GAMMA = 1.0
+#: K: temperature differences below this count as none in the limiter's ratios
+FLOOR = 1e-6
+
+
+def step_start(xl, xdl, shift):
+    """The state the limiter is evaluated at: backward Euler's x - x_dot /
+    shift, the start of the step (x itself without a step)."""
+    return xl - xdl / shift if shift > 0.0 else xl
+
+
+class FluxLimiter:
+    """The limiter of one region's upwinded heat transport; ``keep`` holds
+    1 - alpha_ij of every element of the region (ncells, nb, nb)."""
+
+    def __init__(self, gamma: float = GAMMA):
+        self.gamma = gamma
+        self.upwinding: Upwinding | None = None
+        self.keep: np.ndarray | None = None
+        self._vecs = None
+
+    def bind(self, u: Upwinding) -> None:
+        self.upwinding = u
+
+    def __call__(self, asm, xl, xdl, t, shift) -> None:
+        u = self.upwinding
+        xl = step_start(xl, xdl, shift)
+        n = asm.disc.nlocal
+        nodal = _NodalSums(n)
+        pairs = []
+        for cells in asm.chunks():
+            D, dT, T = upwinding_diffusion(u, CellContext(asm, cells, xl, xdl, t, shift))
+            idx = asm.dofs(u.heat.T)[cells]
+            g = D * dT
+            nodal.add(idx, g, D, T)
+            pairs.append((cells, idx))
+        nodal.complete(asm, self._vectors(asm))
+        Rp, Rm = nodal.ratios(self.gamma)
+        R = np.minimum(Rp, Rm)
+        nb = pairs[0][1].shape[1] if pairs else 0
+        keep = np.empty((asm.mesh.ncells, nb, nb))
+        for cells, idx in pairs:
+            r = R[idx]
+            keep[cells] = 1.0 - np.minimum(r[:, :, None], r[:, None, :])
+        self.keep = keep
+
+    def _vectors(self, asm):
+        """The mesh's section star forest (local dofs to their owners' global
+        ones) and the number of this rank's owned dofs."""
+        if self._vecs is None:
+            dm = asm.disc.mesh.dm
+            self._vecs = (dm.getSectionSF(), dm.getGlobalSection().getStorageSize())
+        return self._vecs
+
+
+class _NodalSums:
+    """P+-, q and the extremes of T per local dof."""
+
+    def __init__(self, n: int):
+        self.n = n
+        self.pplus, self.pminus, self.q, self.T = (np.zeros(n) for _ in range(4))
+        self.tmax = np.full(n, -np.inf)
+        self.tmin = np.full(n, np.inf)
+        self.touched = np.zeros(n, dtype=bool)
+
+    def add(self, idx, g, D, T):
+        flat = idx.ravel()
+        self.pplus += np.bincount(flat, np.maximum(g, 0.0).sum(axis=2).ravel(), self.n)
+        self.pminus += np.bincount(flat, np.minimum(g, 0.0).sum(axis=2).ravel(), self.n)
+        self.q += np.bincount(flat, D.sum(axis=2).ravel(), self.n)
+        nb = idx.shape[1]
+        np.maximum.at(self.tmax, flat, np.repeat(T.max(axis=1), nb))
+        np.minimum.at(self.tmin, flat, np.repeat(T.min(axis=1), nb))
+        self.T[flat] = T.ravel()
+        self.touched[flat] = True
+
+    def complete(self, asm, vecs):
+        """The sums and extremes over every rank's cells (the dofs that are
+        not unknowns of their own, tied ones, keep this rank's): reduced onto
+        the owning rank through the mesh's section star forest, sent back to
+        the ghosts."""
+        from mpi4py import MPI
+        sf, nroots = vecs
+        free = asm.disc.global_index >= 0
+        big = np.finfo(float).max
+        for name, op, fill in (("pplus", MPI.SUM, 0.0), ("pminus", MPI.SUM, 0.0), ("q", MPI.SUM, 0.0),
+                               ("tmax", MPI.MAX, -big), ("tmin", MPI.MIN, big)):
+            a = getattr(self, name)
+            leaf = np.where(self.touched, a, fill)
+            root = np.full(nroots, fill)
+            sf.reduceBegin(MPI.DOUBLE, leaf, root, op)
+            sf.reduceEnd(MPI.DOUBLE, leaf, root, op)
+            got = np.full_like(leaf, fill)
+            sf.bcastBegin(MPI.DOUBLE, root, got, MPI.REPLACE)
+            sf.bcastEnd(MPI.DOUBLE, root, got, MPI.REPLACE)
+            setattr(self, name, np.where(free & self.touched, got, a))
+
+    def ratios(self, gamma):
+        """R+ and R- per local dof: Q/P written as gamma times the room over
+        the mean difference the fluxes span, P/q, that at least ``FLOOR``.
+        R is then continuous where the fluxes vanish and where the flow does
+        (a uniform start, a state without flow: q = 0, P/q = 0), so that
+        round-off does not switch it between 0 and 1."""
+        q = np.where(self.q > 0.0, self.q, 1.0)
+        spread_p = np.where(self.q > 0.0, self.pplus / q, 0.0)
+        spread_m = np.where(self.q > 0.0, -self.pminus / q, 0.0)
+        room_p = np.maximum(self.tmax - self.T, 0.0)
+        room_m = np.maximum(self.T - self.tmin, 0.0)
+        Rp = np.minimum(1.0, gamma * room_p / np.maximum(spread_p, FLOOR))
+        Rm = np.minimum(1.0, gamma * room_m / np.maximum(spread_m, FLOOR))
+        return Rp, Rm
