@@ -293,6 +293,9 @@ class ModelBuilder:
         rock's wall conduction (kernels/wallflux.py)."""
         h = self.heats[Domain.FRACTURE]
         rock = self.heats.get(Domain.MATRIX)
+        if self.p.fracture_supg_wall_conduction and h.upwind:
+            raise InputError("option -thm_fracture_supg_wall_conduction: a term of the SUPG residual; this "
+                             "run's heat transport has none (-thm_heat_transport supg, or leave it out)")
         if rock is not None and h.supg and h.advects and self.p.fracture_supg_wall_conduction:
             h = replace(h, wall=WallConduction(rock.T, rock.conductivity))
             self.heats[Domain.FRACTURE] = h

@@ -198,6 +198,17 @@ def test_upwinding_needs_p1(tmp_path, scheme):
         f"petthm: error: option -thm_heat_transport {scheme}: P1 temperatures only")
 
 
+def test_supg_wall_conduction_needs_supg(tmp_path):
+    """The rock's wall conduction is a term of SUPG's residual: asked for with
+    the limited scheme it is an input error, not silently left out."""
+    proc, _ = run_petthm("lauwerier", tmp_path, "-thm_fe_degree", 1, "-thm_heat_transport", "limited",
+                         "-thm_fracture_supg_wall_conduction", "true", check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines()[-1].startswith(
+        "petthm: error: option -thm_fracture_supg_wall_conduction: a term of the SUPG residual")
+    assert not (tmp_path / "summary.json").exists()
+
+
 def test_upwinding_is_registered_only_for_advected_heat():
     """Heat that is not advected has the capacity lumped and no upwinding term."""
     from petthm.discretisation.model import Domain
