@@ -85,6 +85,12 @@ def thin_wall_layers(mesh) -> str | None:
 TEMPERATURE = {"unit": "K", "output_unit": "degC", "output_offset": -CELSIUS}
 
 
+def heat_scheme(p, degree: int, supg: bool = True) -> str:
+    """The discretisation of a run's heat advection (``-thm_heat_transport``;
+    galerkin where the scene asks for no stabilisation, ``supg=False``)."""
+    return getattr(p, "heat_transport", "supg") if supg else "galerkin"
+
+
 class ModelBuilder:
     """Composes a ``Model`` from the builders below (see the module docstring).
 
@@ -275,7 +281,7 @@ class ModelBuilder:
         ``limited`` (kernels/limiter.py), with the capacity lumped
         (with or without advection: a consistent capacity over- and
         undershoots next to a sudden change of the wall temperature)."""
-        scheme = getattr(self.p, "heat_transport", "supg") if supg else "galerkin"
+        scheme = heat_scheme(self.p, degree, supg)
         if scheme in ("upwind", "limited") and degree != 1:
             raise InputError(f"option -thm_heat_transport {scheme}: P1 temperatures only (this run has "
                              f"P{degree}: -thm_fe_degree 1, or -thm_heat_transport supg)")

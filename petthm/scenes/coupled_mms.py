@@ -30,7 +30,7 @@ from petthm.errors import InputError
 from petthm.mesh import generate as meshing
 from petthm.params import DISCRETISATION, MESH, PHYSICS, param
 from petthm.physics import materials as mt
-from petthm.physics.builders import ModelBuilder
+from petthm.physics.builders import ModelBuilder, heat_scheme
 from petthm.physics.kernels import poroelastic as pe
 from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, face, on_sides
 from petthm.scenes.contact import contact_block_recipe, contact_solver_defaults
@@ -53,8 +53,9 @@ class CoupledMMSParams:
                                    kind=DISCRETISATION)
 
 
-def coefficients(p, dim: int) -> Coefficients:
-    """The operator's coefficients from the scene's parameters."""
+def coefficients(p, dim: int, water_energy: bool = False) -> Coefficients:
+    """The operator's coefficients from the scene's parameters (``water_energy``:
+    the heat transport's stored energy counts the water's content)."""
     return Coefficients(
         dim=dim, E=p.rock_youngs_modulus, nu=p.rock_poisson_ratio, alpha=p.rock_biot_coefficient,
         p_ref=p.initial_pressure, beta_s=p.rock_thermal_expansion, T_ref=p.T0, storage=p.storage,
@@ -62,7 +63,8 @@ def coefficients(p, dim: int) -> Coefficients:
         viscosity=p.fluid_viscosity, C_m=p.rho_c, lam_m=p.conductivity, rho_c_f=p.fluid_rho_c,
         lam_f=p.fluid_conductivity, c_f=p.fluid_compressibility, beta_f=p.fluid_thermal_expansion,
         a0=p.fracture_aperture, Kn=p.fracture_normal_stiffness, sigma0_nn=-p.insitu_stress.normal(
-            np.eye(dim)[-1]), heating=bool(p.thermomechanical_heating), porosity=p.rock_porosity)
+            np.eye(dim)[-1]), heating=bool(p.thermomechanical_heating), porosity=p.rock_porosity,
+        water_energy=water_energy)
 
 
 class _ErrorNorms(Monitor):
@@ -156,11 +158,14 @@ class CoupledMMS(Scene):
         (manual, verification: coupled MMS)."""
         return {**contact_block_recipe(), **flow_heat_first_recipe(self.run.fe_degree)}
 
-    def solution(self, dim: int) -> CoupledSolution:
+    def solution(self, dim: int, degree: int = 1) -> CoupledSolution:
         """The manufactured solution; its aperture must stay above the
-        residual aperture of the joint law (a0 - lam/Kn is not clipped)."""
+        residual aperture of the joint law (a0 - lam/Kn is not clipped).  Its
+        sources count the water's content in the stored energy where the
+        heat transport does (upwind, limited: kernels/transport.StoredWater)."""
         p = self.p
-        m = CoupledSolution(coefficients(p, dim), closed=self.closed, amp=Amplitudes(opening=0.05))
+        water = heat_scheme(p, degree, bool(p.coupled_mms_supg)) in ("upwind", "limited")
+        m = CoupledSolution(coefficients(p, dim, water), closed=self.closed, amp=Amplitudes(opening=0.05))
         g = np.linspace(0.0, 1.0, 21)
         grid = np.meshgrid(*[g] * (dim - 1) + [np.array([0.5])], indexing="ij")
         xs = np.stack(grid, axis=-1).reshape(-1, dim)
@@ -176,7 +181,7 @@ class CoupledMMS(Scene):
 
     def build(self, mesh, degree):
         p, dim = self.p, mesh.dim
-        m = self.solution(dim)
+        m = self.solution(dim, degree)
         supg = bool(p.coupled_mms_supg)
         sources = m.volume_sources()
         b = ModelBuilder(p, dim)
@@ -219,10 +224,12 @@ def source_terms(m: CoupledSolution, sources: dict, frac: dict) -> tuple[list, l
     """The manufactured right-hand sides that the flow and heat builders do
     not take (-int w f): f_u on the cells, the face loads h of each half on
     the trace of u that lies in it (the half the fracture normal points into
-    is the + face), and on the fracture + int w dt rho_f C_f da/dt dTf/dt and
-    + int w dt da/dt ds/dt (dt = 1/shift: backward Euler's stored energy,
-    kernels/heat.heat_f0, and water content, kernels/flow.flow_f0, for the
-    step taken, also after a rejected step)."""
+    is the + face), and on the fracture + int w (dE/dt - backward Euler's
+    quotient of E) for its stored energy E and + int w dt da/dt ds/dt (dt =
+    1/shift: backward Euler's stored energy, kernels/heat.heat_f0, and water
+    content, kernels/flow.flow_f0, for the step taken, also after a rejected
+    step), with the water's content in the
+    stored energy also + int w dt rho_f C_f dm/dt dTm/dt in the rock."""
     def volume(f, ctx):
         v = -f(ctx.x, ctx.t)
         return v if v.ndim == 3 else v[..., None]
@@ -233,9 +240,14 @@ def source_terms(m: CoupledSolution, sources: dict, frac: dict) -> tuple[list, l
         return -np.where(up, h[1], h[-1])
     def step_increment(increment, ctx):
         return (increment(ctx.x, ctx.t) / ctx.shift if ctx.shift > 0 else np.zeros(ctx.shape))[..., None]
+
+    def step_energy(step, ctx):
+        return (step(ctx.x, ctx.t, 1.0 / ctx.shift) if ctx.shift > 0 else np.zeros(ctx.shape))[..., None]
     res = [CellResidual("u", partial(volume, sources["u"]), None, region=MATRIX),
-           CellResidual("Tf", partial(step_increment, frac["Tf_increment"]), None, region=FRACTURE),
+           CellResidual("Tf", partial(step_energy, frac["Tf_step"]), None, region=FRACTURE),
            CellResidual("pf", partial(step_increment, frac["pf_increment"]), None, region=FRACTURE)]
     res += [CellResidual(Trace("u", side), partial(face_load, side), None, region=FRACTURE)
             for side in (Side.PLUS, Side.MINUS)]
+    if m.c.water_energy:
+        res.append(CellResidual("Tm", partial(step_increment, sources["Tm_increment"]), None, region=MATRIX))
     return res, []

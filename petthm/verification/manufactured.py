@@ -24,7 +24,7 @@ as the kernels implement them; the docstrings there):
   - lambda_m grad Tm) (+ Tm (beta_s K d(div u)/dt - phi beta_f dpm/dt) with
   the thermo-mechanical heating of section 6);
 * fracture (the stored energy's rate form; backward Euler's quotient
-  differs by a term of the step: ``fracture_sources``):
+  differs from it by terms of the step: ``fracture_sources``):
   g_pf = d/dt (a (1 + c_f (pf - p0) - beta_f (Tf - T0))) + div qf + q_L,
   qf = -a^3/(12 mu(Tf)) grad pf, q_L = sum over the halves of q . n_out
   (n_out from Gamma into the half: the leakoff the matrix rows of the
@@ -73,6 +73,7 @@ class Coefficients:
     sigma0_nn: float            # in-situ normal stress on the fracture, tension positive
     heating: bool = False       # the thermo-mechanical heating of section 6
     porosity: float = 0.0
+    water_energy: bool = False  # the stored energy counts the water's content (upwind, limited schemes)
 
     @property
     def bulk(self) -> float:
@@ -170,6 +171,7 @@ class CoupledSolution:
         d = c.dim
         e = sp.Matrix([0] * (d - 1) + [1])
         self.f_u, self.f_p, self.f_T, self.sigma, self.h = {}, {}, {}, {}, {}
+        self.Tm_increment = {s: 0 for s in HALVES}
         q_L, wall_heat = 0, 0
         P = self.pf + self.lam + c.sigma0_nn
         for s in HALVES:
@@ -183,6 +185,11 @@ class CoupledSolution:
                            + c.alpha * divu_t + self.div(q))
             flux = c.rho_c_f * q * h["Tm"] - c.lam_m * self.grad(h["Tm"])
             fT = c.C_m * sp.diff(h["Tm"], t) + self.div(flux)
+            if c.water_energy:
+                m = (c.storage * (h["pm"] - c.p_ref) - c.thermal_storage * (h["Tm"] - c.T_ref)
+                     + c.alpha * self.div(h["u"]))
+                fT += c.rho_c_f * sp.diff(m * h["Tm"], t)
+                self.Tm_increment[s] = c.rho_c_f * sp.diff(m, t) * sp.diff(h["Tm"], t)
             if c.heating:
                 fT += h["Tm"] * (c.beta_s * c.bulk * divu_t - c.porosity * c.beta_f * sp.diff(h["pm"], t))
             self.f_T[s] = fT
@@ -198,7 +205,8 @@ class CoupledSolution:
         qf = -a ** 3 / 12 * self.mobility(self.Tf) * grad_t(self.pf)
         self.content = a * (1 + c.c_f * (self.pf - c.p_ref) - c.beta_f * (self.Tf - c.T_ref))
         self.g_pf = sp.diff(self.content, t) + div_t(qf) + q_L
-        self.g_Tf = (c.rho_c_f * (a * sp.diff(self.Tf, t) + self.Tf * sp.diff(a, t))
+        self.stored = self.content if c.water_energy else a      # energy: rho_f C_f stored Tf
+        self.g_Tf = (c.rho_c_f * sp.diff(self.stored * self.Tf, t)
                      + div_t(c.rho_c_f * qf * self.Tf - a * c.lam_f * grad_t(self.Tf)) + wall_heat)
 
     # -- numpy functions ----------------------------------------------------------------
@@ -261,22 +269,34 @@ class CoupledSolution:
         return self._halves(self.sigma)
 
     def volume_sources(self) -> dict:
-        """{'u': f_u (..., d), 'pm': f_p, 'Tm': f_T}."""
-        return {"u": self._halves(self.f_u), "pm": self._halves(self.f_p), "Tm": self._halves(self.f_T)}
+        """{'u': f_u (..., d), 'pm': f_p, 'Tm': f_T, 'Tm_increment': rho_f C_f
+        dm/dt dTm/dt}: with ``water_energy`` the stored energy rho_f C_f m Tm
+        of the water content m = S (pm - p0) - B (Tm - T0) + alpha div u, whose
+        backward-Euler quotient differs from its rate by a term of the step
+        (as the fracture's, ``fracture_sources``; 0 without it)."""
+        return {"u": self._halves(self.f_u), "pm": self._halves(self.f_p), "Tm": self._halves(self.f_T),
+                "Tm_increment": self._halves(self.Tm_increment)}
 
     def fracture_sources(self) -> dict:
-        """{'pf': g_pf, 'Tf': g_Tf, 'pf_increment': da/dt ds/dt, 'Tf_increment':
-        rho_f C_f da/dt dTf/dt}.  Backward Euler's stored energy
-        (a T - a_old T_old)/dt (kernels/heat.py) is rho_f C_f (a dTf/dt + Tf
-        da/dt - dt da/dt dTf/dt) for fields affine in t: the source of a step dt
-        is g_Tf - dt Tf_increment; likewise the content a (1 + s) of the
-        fracture flow (kernels/flow.py), s = c_f (pf - p0) - beta_f (Tf - T0)."""
+        """{'pf': g_pf, 'Tf': g_Tf, 'pf_increment': da/dt ds/dt, 'Tf_step':
+        a function (x, t, dt) of the difference between the rate and backward
+        Euler's quotient of the stored energy E = rho_f C_f A Tf, A = a (with
+        ``water_energy``: the content a (1 + s)): dE/dt - (E(t) - E(t - dt))/dt.
+        The stored energy of a step is that quotient (kernels/heat.py,
+        kernels/transport.py: it telescopes), so the source of a step dt is
+        g_Tf minus it; E is cubic in t with the content, quadratic without.
+        Likewise the content a (1 + s) of the fracture flow (kernels/flow.py),
+        s = c_f (pf - p0) - beta_f (Tf - T0), quadratic in t: its quotient is
+        its rate less dt da/dt ds/dt."""
         sp, t, c = self.sp, self.t, self.c
-        inc = c.rho_c_f * sp.diff(self.a, t) * sp.diff(self.Tf, t)
         sdot = c.c_f * sp.diff(self.pf, t) - c.beta_f * sp.diff(self.Tf, t)
+        energy = c.rho_c_f * self.stored * self.Tf
+        E, Et = self._lambdify(energy), self._lambdify(sp.diff(energy, t))
+
+        def step(x, t, dt):
+            return Et(x, t) - (E(x, t) - E(x, t - dt)) / dt
         return {"pf": self._lambdify(self.g_pf), "Tf": self._lambdify(self.g_Tf),
-                "pf_increment": self._lambdify(sp.diff(self.a, t) * sdot),
-                "Tf_increment": self._lambdify(inc)}
+                "pf_increment": self._lambdify(sp.diff(self.a, t) * sdot), "Tf_step": step}
 
     def face_load(self, half: int) -> Callable:
         """h of a half (..., d): sigma nu + P nu on its face."""

@@ -52,7 +52,12 @@ Where a node has no room (Q = 0: its temperature is an extreme of its
 neighbours', as everywhere in a uniform start), R = 0 even without a flux
 to limit (P = 0): the flux that the step itself creates there is upwinded;
 the floor dT0 keeps R continuous there, and where the state has no flow
-(q_i = 0).
+(q_i = 0).  A node with a Dirichlet condition has R = 1: its row is the
+condition, and the fluxes to its neighbours are limited by their room (a
+boundary node is an extreme of its one-sided patch wherever the
+temperature varies across the boundary: with R = 0 every boundary of a
+smooth solution would be upwinded).  Tied nodes (the rock's wall nodes of
+the equilibrium exchange) keep the room of their own side's cells.
 """
 from __future__ import annotations
 
@@ -82,6 +87,7 @@ class FluxLimiter:
         self.upwinding: Upwinding | None = None
         self.keep: np.ndarray | None = None
         self._vecs = None
+        self._dirichlet = None
 
     def bind(self, u: Upwinding) -> None:
         self.upwinding = u
@@ -99,14 +105,25 @@ class FluxLimiter:
             nodal.add(idx, g, D, T)
             pairs.append((cells, idx))
         nodal.complete(asm, self._vectors(asm))
-        Rp, Rm = nodal.ratios(self.gamma)
-        R = np.minimum(Rp, Rm)
+        R = np.minimum(*nodal.ratios(self.gamma))
+        R[self._prescribed(asm)] = 1.0
         nb = pairs[0][1].shape[1] if pairs else 0
         keep = np.empty((asm.mesh.ncells, nb, nb))
         for cells, idx in pairs:
             r = R[idx]
             keep[cells] = 1.0 - np.minimum(r[:, :, None], r[:, None, :])
         self.keep = keep
+
+    def _prescribed(self, asm) -> np.ndarray:
+        """The local dofs of this field with a Dirichlet condition: their rows
+        are the condition, so their bounds need no room (R = 1 there); the
+        fluxes between them and their neighbours are limited by the
+        neighbours' room alone."""
+        if self._dirichlet is None:
+            name = self.upwinding.heat.T
+            parts = [dd.dofs.ravel() for dd in asm.disc.dirichlet if dd.field == name]
+            self._dirichlet = np.concatenate(parts) if parts else np.zeros(0, dtype=int)
+        return self._dirichlet
 
     def _vectors(self, asm):
         """The mesh's section star forest (local dofs to their owners' global
