@@ -92,6 +92,17 @@ def _initial_row(d) -> dict:
     return {k: float(v) for k, v in first.items() if v not in ("", None)}
 
 
+def converged_verdicts() -> dict[str, dict]:
+    """The statements' verdicts on the mesh-converged runs, as the manual
+    records them: {key: {"verdict", "section"}} (empty where not recorded)."""
+    import csv
+    path = os.path.join(ROOT, "benchmarks", "records", "scene3_verdicts.csv")
+    if not os.path.exists(path):
+        return {}
+    with open(path) as f:
+        return {r["key"]: r for r in csv.DictReader(f)}
+
+
 def statements(rows) -> list[dict]:
     """The paper's statements about the three cases, each with the measured numbers."""
     by = {r["case"]: r for r in rows}
@@ -99,24 +110,30 @@ def statements(rows) -> list[dict]:
         return []
     c1, c2, c3 = by[1], by[2], by[3]
     return [
-        {"statement": "maximum aperture increase: case 3 > case 2 > case 1 (absolute, mm)",
+        {"key": "da_order",
+         "statement": "maximum aperture increase: case 3 > case 2 > case 1 (absolute, mm)",
          "measured": f"{c3['da_max_mm']} / {c2['da_max_mm']} / {c1['da_max_mm']}",
          "holds": c3["da_max_mm"] > c2["da_max_mm"] > c1["da_max_mm"]},
-        {"statement": "maximum aperture increase relative to the initial aperture: case 3 > case 2 > case 1",
+        {"key": "da_ratio_order",
+         "statement": "maximum aperture increase relative to the initial aperture: case 3 > case 2 > case 1",
          "measured": f"{c3['da_max_ratio']} / {c2['da_max_ratio']} / {c1['da_max_ratio']}",
          "holds": c3["da_max_ratio"] > c2["da_max_ratio"] > c1["da_max_ratio"]},
-        {"statement": "production temperature drop at 30 years: case 2 > case 3 > case 1 (K)",
+        {"key": "drop_order",
+         "statement": "production temperature drop at 30 years: case 2 > case 3 > case 1 (K)",
          "measured": f"{c2['dT_prod_30y']} / {c3['dT_prod_30y']} / {c1['dT_prod_30y']}",
          "holds": c2["dT_prod_30y"] > c3["dT_prod_30y"] > c1["dT_prod_30y"]},
-        {"statement": f"thermal breakthrough (drop >= {BREAKTHROUGH} K) earlier in case 3 than in case 1 "
+        {"key": "breakthrough",
+         "statement": f"thermal breakthrough (drop >= {BREAKTHROUGH} K) earlier in case 3 than in case 1 "
                       "(years)",
          "measured": f"{c3['breakthrough_years']} / {c1['breakthrough_years']}",
          "holds": (c3["breakthrough_years"] < c1["breakthrough_years"]) or
                   (math.isfinite(c3["breakthrough_years"]) and not math.isfinite(c1["breakthrough_years"]))},
-        {"statement": "area of raised aperture (> 10 %) at 30 years smaller in case 3 than in case 2 (m2)",
+        {"key": "raised_area",
+         "statement": "area of raised aperture (> 10 %) at 30 years smaller in case 3 than in case 2 (m2)",
          "measured": f"{c3['raised_area_30y_m2']} / {c2['raised_area_30y_m2']}",
          "holds": c3["raised_area_30y_m2"] < c2["raised_area_30y_m2"]},
-        {"statement": "the maximum aperture increase peaks (paper: around 7 years) and then declines",
+        {"key": "peak",
+         "statement": "the maximum aperture increase peaks (paper: around 7 years) and then declines",
          "measured": "; ".join(f"case {c}: peak {r['da_peak_years']} y, "
                                f"{r['da_max_mm']} -> {r['da_30y_mm']} mm"
                                for c, r in by.items()),
@@ -287,16 +304,22 @@ def report(out, variant, cases):
     write_csv(os.path.join(out, "scene3.csv"), rows)
     table = markdown(COLUMNS, rows)
     st = statements(rows)
+    verdicts = converged_verdicts()
     text = [f"# Scene 3 (inclined_penny, {variant}): the three cases to 30 years", "", table, ""]
     if st:
         for r in st:
             r["verdict"] = "yes" if r["holds"] else "no"
+        for r in st:
+            v = verdicts.get(r["key"], {})
+            r["converged"] = v.get("verdict", "not recorded")
+            r["section"] = v.get("section", "")
         text += ["## The paper's statements", "",
-                 f"On these runs ({variant} mesh); the default resolution's results, with either heat "
-                 "transport scheme, and what they hinge on: the manual, the paper's scenes, Scene 3, "
-                 "'Results at the default resolution' and 'With bound-preserving heat transport'.", "",
+                 f"'holds on these runs': on this run's ({variant}) mesh; 'converged': the verdict on the "
+                 "mesh-converged runs recorded in the manual (benchmarks/records/scene3_verdicts.csv), and "
+                 "the manual's section (the paper's scenes, Scene 3) that explains it.", "",
                  markdown([("statement", "statement", ""), ("measured", "measured", ""),
-                           ("holds on these runs", "verdict", "")],
+                           ("holds on these runs", "verdict", ""), ("converged", "converged", ""),
+                           ("manual", "section", "")],
                           st), ""]
     with open(os.path.join(out, "scene3.md"), "w") as f:
         f.write("\n".join(text))
