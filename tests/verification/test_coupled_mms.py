@@ -129,8 +129,8 @@ def test_interpolated_exact_solution_is_consistent(tmp_path, monkeypatch):
     import petthm.scenes.coupled_mms as cm
     made = cm.coefficients
 
-    def sources_with_alpha_08(p, dim):
-        return dataclasses.replace(made(p, dim), alpha=0.8)
+    def sources_with_alpha_08(p, dim, *more):
+        return dataclasses.replace(made(p, dim, *more), alpha=0.8)
     monkeypatch.setattr(cm, "coefficients", sources_with_alpha_08)
     bad = [_consistency(tmp_path / f"n{k}", s, thm_rock_biot_coefficient=0.88)
            for k, s in enumerate((0.0625, 0.03125))]
