@@ -85,6 +85,10 @@ def thin_wall_layers(mesh) -> str | None:
 TEMPERATURE = {"unit": "K", "output_unit": "degC", "output_offset": -CELSIUS}
 
 
+#: the heat transport schemes whose stored energy counts the water's content (kernels/transport.py)
+WATER_ENERGY_SCHEMES = ("upwind", "limited")
+
+
 def heat_scheme(p, degree: int, supg: bool = True) -> str:
     """The discretisation of a run's heat advection (``-thm_heat_transport``;
     galerkin where the scene asks for no stabilisation, ``supg=False``)."""
@@ -282,10 +286,10 @@ class ModelBuilder:
         (with or without advection: a consistent capacity over- and
         undershoots next to a sudden change of the wall temperature)."""
         scheme = heat_scheme(self.p, degree, supg)
-        if scheme in ("upwind", "limited") and degree != 1:
+        if scheme in WATER_ENERGY_SCHEMES and degree != 1:
             raise InputError(f"option -thm_heat_transport {scheme}: P1 temperatures only (this run has "
                              f"P{degree}: -thm_fe_degree 1, or -thm_heat_transport supg)")
-        if scheme in ("upwind", "limited"):
+        if scheme in WATER_ENERGY_SCHEMES:
             limited = advect and scheme == "limited"
             return {"supg": False, "lumped": True, "upwind": advect, "limited": limited}
         return {"supg": scheme == "supg", "lumped": lumped}

@@ -30,7 +30,7 @@ from petthm.errors import InputError
 from petthm.mesh import generate as meshing
 from petthm.params import DISCRETISATION, MESH, PHYSICS, param
 from petthm.physics import materials as mt
-from petthm.physics.builders import ModelBuilder, heat_scheme
+from petthm.physics.builders import WATER_ENERGY_SCHEMES, ModelBuilder, heat_scheme
 from petthm.physics.kernels import poroelastic as pe
 from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, face, on_sides
 from petthm.scenes.contact import contact_block_recipe, contact_solver_defaults
@@ -164,7 +164,7 @@ class CoupledMMS(Scene):
         sources count the water's content in the stored energy where the
         heat transport does (upwind, limited: kernels/transport.StoredWater)."""
         p = self.p
-        water = heat_scheme(p, degree, bool(p.coupled_mms_supg)) in ("upwind", "limited")
+        water = heat_scheme(p, degree, bool(p.coupled_mms_supg)) in WATER_ENERGY_SCHEMES
         m = CoupledSolution(coefficients(p, dim, water), closed=self.closed, amp=Amplitudes(opening=0.05))
         g = np.linspace(0.0, 1.0, 21)
         grid = np.meshgrid(*[g] * (dim - 1) + [np.array([0.5])], indexing="ij")
@@ -228,8 +228,8 @@ def source_terms(m: CoupledSolution, sources: dict, frac: dict) -> tuple[list, l
     quotient of E) for its stored energy E and + int w dt da/dt ds/dt (dt =
     1/shift: backward Euler's stored energy, kernels/heat.heat_f0, and water
     content, kernels/flow.flow_f0, for the step taken, also after a rejected
-    step), with the water's content in the
-    stored energy also + int w dt rho_f C_f dm/dt dTm/dt in the rock."""
+    step), with the water's content in the stored energy also + int w dt
+    rho_f C_f dm/dt dTm/dt in the rock."""
     def volume(f, ctx):
         v = -f(ctx.x, ctx.t)
         return v if v.ndim == 3 else v[..., None]
