@@ -124,9 +124,9 @@ def test_upwinding_keeps_an_advected_front_in_bounds(tmp_path, scheme):
 def test_upwinding_keeps_lauwerier_in_bounds_with_its_energy_balance(tmp_path, scheme):
     """Lauwerier (P1): Tf and Tm within [Tinj, T0] (SUPG with a consistent
     rock capacity: Tm 20 K above T0 next to the cooled wall), every step's
-    energy balance at round-off, the outlet temperature within 6.5 % of the
-    analytical solution (the early outlet error is that of the lumped rock
-    capacity: the limited scheme does not reduce it)."""
+    energy balance at round-off, the outlet temperature within 6 % (limited:
+    6.5 %) of the analytical solution (the early outlet error is that of the
+    lumped rock capacity: the limited scheme does not reduce it)."""
     _, s = run_petthm("lauwerier", tmp_path, "-thm_fe_degree", 1, "-thm_heat_transport", scheme)
     for f in ("Tf", "Tm"):
         print(f, s["bounds"][f])
@@ -134,7 +134,7 @@ def test_upwinding_keeps_lauwerier_in_bounds_with_its_energy_balance(tmp_path, s
     rows = read_csv(tmp_path / "history.csv")
     assert max(abs(float(r["energy_balance"])) for r in rows) <= 1e-8
     print("errors", s["error"])
-    assert s["error"]["outlet_max_rel_t_ge_1e4"] <= 0.065
+    assert s["error"]["outlet_max_rel_t_ge_1e4"] <= {"upwind": 0.06, "limited": 0.065}[scheme]
     assert s["error"]["profile_max_rel_t1e+08"] <= 2e-3
 
 
