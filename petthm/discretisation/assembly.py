@@ -288,6 +288,18 @@ class Assembler:
                 self._scatter(out, ft.field, fb.cells, r)
         return out
 
+    def tighten(self, xl) -> bool:
+        """Each distinct ``prepare`` of the terms that can be tightened at a
+        solved state (``prepare.tighten(asm, xl)``, the flux limiter): whether
+        any changed the step's equations (collective)."""
+        done, changed = set(), False
+        for term in self.model.residuals:
+            pre = term.prepare
+            if pre is not None and hasattr(pre, "tighten") and id(pre) not in done:
+                done.add(id(pre))
+                changed = pre.tighten(self, xl) or changed
+        return changed
+
     def _prepare(self, terms, xl, xdl, t, shift):
         """Each distinct ``prepare`` of the terms, once, before the cells."""
         done = set()

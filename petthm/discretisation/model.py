@@ -174,6 +174,18 @@ class Range:
         return self.lower is not None and self.upper is not None
 
 
+@dataclass(frozen=True)
+class Heating:
+    """A heat source of the state's own rates that the temperature ranges
+    allow for (the thermo-mechanical heating, ``run/ranges.py``):
+    ``power(ctx)`` (W/m3, positive where it heats) at the points of
+    ``region``'s cells, in a field of volumetric heat capacity ``capacity``
+    (J/(m3 K))."""
+    region: Region
+    power: Callable
+    capacity: float
+
+
 @dataclass
 class Model:
     """The active fields and every term, each on its region.  ``bounds``
@@ -195,6 +207,8 @@ class Model:
     ranges: dict[str, Range] = field(default_factory=dict)
     #: checks of the mesh a term is accurate on: ``check(mesh)`` returns a warning, or None
     mesh_checks: list[Callable] = field(default_factory=list)
+    #: a heat source the temperature ranges allow for (``Heating``)
+    heating: Heating | None = None
 
     def regions(self) -> list[Region]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

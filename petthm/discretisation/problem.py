@@ -186,6 +186,22 @@ class Problem:
             return memo[3]
         return self.local_residual(xl, xdl, t, shift)
 
+    def tighten(self, X: PETSc.Vec, t: float) -> bool:
+        """Lower the flux limiters' factors of the step being solved to those
+        of its solved state X at time t where they exceed them
+        (``kernels/limiter.py``): whether the step's equations changed and
+        must be solved again (collective)."""
+        xl, _ = self.local_arrays(X, t)
+        changed = False
+        for asm in self.assemblers.values():
+            changed = asm.tighten(xl) or changed
+        return changed
+
+    def has_tightening(self) -> bool:
+        """Whether a term's equations depend on the solved state of the step
+        through a limiter that ``tighten`` lowers."""
+        return any(hasattr(term.prepare, "tighten") for term in self.model.residuals)
+
     def ifunction(self, ts, t, X, Xdot, F):
         self._ev_res.begin()
         xl, xdl = self.local_arrays(X, t, Xdot)

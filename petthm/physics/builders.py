@@ -38,6 +38,7 @@ from petthm.discretisation.model import (
     FRACTURE,
     FRACTURE_DUAL,
     Domain,
+    Heating,
     Model,
     NodeOutputs,
     PointTerm,
@@ -291,7 +292,8 @@ class ModelBuilder:
                              f"P{degree}: -thm_fe_degree 1, or -thm_heat_transport supg)")
         if scheme in WATER_ENERGY_SCHEMES:
             limited = advect and scheme == "limited"
-            return {"supg": False, "lumped": True, "upwind": advect, "limited": limited}
+            settle = {"settle": self.p.heat_limiter_settle} if limited else {}
+            return {"supg": False, "lumped": True, "upwind": advect, "limited": limited, **settle}
         return {"supg": scheme == "supg", "lumped": lumped}
 
     def wells(self, terms: list[PointTerm]) -> None:
@@ -323,7 +325,10 @@ class ModelBuilder:
         if self.elastic is not None and m.has("Tm") and self.p.thermomechanical_heating:
             porous = m.has("pm")
             phi_beta = self.p.rock_porosity * self.p.fluid_thermal_expansion if porous else 0.0
-            m.add(pe.heating_terms(self.elastic, "Tm", "pm" if porous else None, phi_beta))
+            pm = "pm" if porous else None
+            m.add(pe.heating_terms(self.elastic, "Tm", pm, phi_beta))
+            m.heating = Heating(self.elastic.region, pe.heating_power(self.elastic, "Tm", pm, phi_beta),
+                                self.heats[Domain.MATRIX].capacity)
         # what a block preconditioner adds to the pressure block (not the Jacobian)
         if self.elastic is not None and self.elastic.p is not None and m.has(self.elastic.p):
             m.preconditioner += pe.fixed_stress_terms(self.elastic, self.elastic.p)

@@ -185,6 +185,12 @@ DECLARED = {
                             "temperature is smooth) or galerkin (no stabilisation); theory manual, "
                             "discrete bounds",
                             choices=("supg", "upwind", "limited", "galerkin"), kind=DISCRETISATION),
+    "heat_limiter_settle": param(1e-4, "-", "with -thm_heat_transport limited: how far the limited fluxes "
+                                 "may push a local extreme of a step's solved state further (their sum over "
+                                 "the node's upwinding diffusion), as a fraction of the temperature range, "
+                                 "before the step's factors are lowered to the solved state's (larger: the "
+                                 "factors of the step's start are kept more often; theory manual, limited "
+                                 "flux correction)", lo=0.0, lo_open=True, kind=DISCRETISATION),
     # state and wells (sections 2, 9)
     "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0", kind=PHYSICS),
     "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0", kind=PHYSICS),
@@ -213,7 +219,8 @@ FLUID_HEAT = ("fluid_density", "fluid_heat_capacity", "fluid_conductivity")
 FLUID_FLOW = ("fluid_viscosity", "fluid_compressibility", "fluid_thermal_expansion")
 JOINT = ("fracture_aperture", "fracture_normal_stiffness", "fracture_residual_fraction")
 CONTACT = ("contact_pairing", "fracture_friction", "fracture_cohesion")
-FRACTURE_HEAT = ("fracture_heat_exchange", "fracture_supg_wall_conduction", "heat_transport")
+HEAT_DISCRETISATION = ("heat_transport", "heat_limiter_settle")
+FRACTURE_HEAT = ("fracture_heat_exchange", "fracture_supg_wall_conduction", *HEAT_DISCRETISATION)
 #: the defaults of a scene whose reference solution is frictionless
 FRICTIONLESS = {"fracture_friction": 0.0}
 WELLS = ("injection_rate", "injection_temperature", "production_pressure", "well_radius")

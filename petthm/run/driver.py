@@ -382,6 +382,7 @@ class Run:
         summary["solver_costs"] = solver_costs()
         summary["peak_memory_mb"] = peak_memory_mb()
         summary["pc_rebuilds_forced"] = stepper.reuse.rebuilds if stepper.reuse is not None else None
+        summary["limiter_settling_passes"] = stepper.settling.passes if stepper.settling is not None else None
         try:
             write_summary(os.path.join(self.outdir, "summary.json"), summary, comm)
         except WriteFailure as e:

@@ -71,7 +71,7 @@ class HeatMMS(Scene):
     parameters = (mt.group("Rock and fluid heat", ROCK_AND_FLUID_HEAT, rock_density=1.0,
                            rock_heat_capacity=1.0,
                            rock_conductivity=1.0, fluid_density=1.0, fluid_heat_capacity=1.0),
-                  mt.group("Discretisation", ("heat_transport",)),
+                  mt.group("Discretisation", mt.HEAT_DISCRETISATION),
                   MMSParams)
     time = TimeDefaults(final_time=1.0, dt_initial=0.25, mesh_size=0.125)
     t_ref = 1.0
@@ -258,7 +258,7 @@ class HeatAdvection(Scene):
                            fluid_conductivity=0.0),
                   mt.group("Temperatures", ("initial_temperature", "injection_temperature"),
                            initial_temperature=100.0),
-                  mt.group("Discretisation", ("heat_transport",)),
+                  mt.group("Discretisation", mt.HEAT_DISCRETISATION),
                   AdvectionParams)
     time = TimeDefaults(final_time=1.0e7, dt_initial=2e5, output_interval=5, mesh_size=2.5)
     history_columns = ("cell_peclet",)

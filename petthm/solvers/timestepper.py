@@ -25,9 +25,10 @@ from petthm.solvers.courant import FrontStepLimit
 from petthm.solvers.fieldsplit import VIFieldSplit  # noqa: F401  (-pc_python_type petthm.solvers.timestepper.VIFieldSplit)
 from petthm.solvers.options import Proposals
 from petthm.solvers.predictor import LinearPredictor
+from petthm.solvers.settling import Settling
 from petthm.solvers.snes_hooks import BiactiveRelease, PreconditionerReuse, SNESUpdates
 from petthm.solvers.stepcontrol import RECOVERY, StepControl, error_control_defaults  # noqa: F401  (re-exported)
-from petthm.solvers.viconvergence import VIConvergence
+from petthm.solvers.viconvergence import DefaultConvergence, VIConvergence
 
 
 def failure_message(ts: PETSc.TS) -> str:
@@ -87,8 +88,7 @@ class TimeStepper:
         self.snes = ts.getSNES()
         self.updates = SNESUpdates()
         self.snes.setUpdate(self.updates)
-        if problem.model.bounds:
-            self._set_bounds(ts.getSNES())
+        self._set_convergence(problem)
         pc = ts.getSNES().getKSP().getPC()
         self.context = fieldsplit.SolverContext(problem, self.snes, proposals)
         self._set_field_splits(pc)
@@ -142,6 +142,18 @@ class TimeStepper:
             return
         pc.setFieldSplitIS(*[(s.name, s.iset) for s in fieldsplit.field_splits(self.context)])
 
+    def _set_convergence(self, problem: Problem) -> None:
+        """The VI bounds and Newton's convergence test: SNES's own, the VI one
+        with -snes_stol (``VIConvergence``), and around either the limited
+        heat transport's settling of each step (``Settling``)."""
+        self.convergence = None                  # a Python convergence test, where petthm sets one
+        if problem.model.bounds:
+            self._set_bounds(self.snes)
+        self.settling = None
+        if problem.has_tightening():
+            self.settling = Settling(problem, self.ts, self.convergence or DefaultConvergence())
+            self.settling.install(self.snes)
+
     def _set_bounds(self, snes):
         """Variable bounds (contact) need one of SNES's VI Newton methods."""
         if snes.getType() not in ("vinewtonrsls", "vinewtonssls"):
@@ -150,7 +162,8 @@ class TimeStepper:
         lower, upper = self.problem.variable_bounds()
         snes.setVariableBounds(lower, upper)
         if snes.getType() == "vinewtonrsls":     # its default test ignores -snes_stol
-            VIConvergence().install(snes)
+            self.convergence = VIConvergence()
+            self.convergence.install(snes)
         self.updates.hooks.append(BiactiveRelease(lower))
 
     def _post_step(self, ts):

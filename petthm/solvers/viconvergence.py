@@ -33,13 +33,18 @@ from petthm import compat
 Reason = PETSc.SNES.ConvergedReason
 
 
-class VIConvergence:
-    """SNESConvergedDefault_VI with the -snes_stol test (module docstring);
-    install with ``install(snes)``."""
+class DefaultConvergence:
+    """PETSc's SNESConvergedDefault in Python (NaN, -snes_atol, the
+    function-evaluation limit, -snes_rtol times the initial norm, -snes_stol,
+    -snes_divergence_tolerance), for a test that adds to it
+    (``solvers/settling.py``); install with ``install(snes)``."""
+
+    divergence_test = True
 
     def __init__(self):
         self.ttol = 0.0
         self.floor_tol = 0.0
+        self.norm0 = 0.0
 
     def install(self, snes: PETSc.SNES) -> None:
         snes.setConvergenceTest(self)
@@ -49,20 +54,44 @@ class VIConvergence:
 
     def reason(self, snes: PETSc.SNES, it: int, xnorm: float, ynorm: float, fnorm: float) -> int:
         """The reason for the norms of iteration ``it``: |x|, the update |dx|
-        and the (VI) function norm."""
+        and the function norm."""
         rtol, atol, stol, _ = snes.getTolerances()
         if it == 0:
             self.ttol = fnorm * rtol
             self.floor_tol = fnorm * math.sqrt(rtol)
+            self.norm0 = fnorm
         if math.isnan(fnorm):
             return compat.SNES_DIVERGED_NAN
         if fnorm < atol:
             return Reason.CONVERGED_FNORM_ABS
-        if it > 0 and fnorm < self.ttol:
-            return Reason.CONVERGED_FNORM_RELATIVE
-        if it > 0 and ynorm < stol * xnorm and fnorm <= self.floor_tol:
-            return Reason.CONVERGED_SNORM_RELATIVE
         max_funcs = snes.getMaxFunctionEvaluations()
         if 0 <= max_funcs <= snes.getFunctionEvaluations():
             return Reason.DIVERGED_FUNCTION_COUNT
+        if it > 0 and fnorm <= self.ttol:
+            return Reason.CONVERGED_FNORM_RELATIVE
+        if it > 0 and self.small_step(xnorm, ynorm, fnorm, stol):
+            return Reason.CONVERGED_SNORM_RELATIVE
+        divtol = _divergence_tolerance() if self.divergence_test else -1.0
+        if it > 0 and divtol > 0 and fnorm > divtol * self.norm0:
+            return Reason.DIVERGED_DTOL
         return Reason.CONVERGED_ITERATING
+
+    def small_step(self, xnorm: float, ynorm: float, fnorm: float, stol: float) -> bool:
+        return ynorm < stol * xnorm
+
+
+def _divergence_tolerance() -> float:
+    """-snes_divergence_tolerance (PETSc's default 1e4; -1 switches the test off)."""
+    return PETSc.Options().getReal("snes_divergence_tolerance", 1e4)
+
+
+class VIConvergence(DefaultConvergence):
+    """SNESConvergedDefault_VI with the -snes_stol test (module docstring):
+    the step-length test only where the function norm has fallen to
+    sqrt(rtol) of its initial value, and no divergence test; install with
+    ``install(snes)``."""
+
+    divergence_test = False
+
+    def small_step(self, xnorm: float, ynorm: float, fnorm: float, stol: float) -> bool:
+        return ynorm < stol * xnorm and fnorm <= self.floor_tol

@@ -69,8 +69,9 @@ def _times(outdir):
 
 @pytest.mark.parametrize("scene,options,every", [
     (*LAUWERIER, ("-thm_checkpoint_interval", 5)), (*SCENE2, ("-thm_checkpoint_interval", 5)),
-    (*LAUWERIER, ("-thm_checkpoint_interval", 0, "-thm_checkpoint_wall", 1e-9))],
-    ids=["lauwerier", "scene2", "lauwerier-wall"])
+    (*LAUWERIER, ("-thm_checkpoint_interval", 0, "-thm_checkpoint_wall", 1e-9)),
+    (SCENE2[0], ("-thm_thermomechanical_heating", "true", *SCENE2[1]), ("-thm_checkpoint_interval", 5))],
+    ids=["lauwerier", "scene2", "lauwerier-wall", "scene2-heating"])
 def test_kill_9_then_restart_gives_the_uninterrupted_run(tmp_path, scene, options, every):
     """A fracture TH scene and a contact scene (Scene 2: u, lam, pf, Tf,
     Tm), killed with SIGKILL after their first checkpoint (every 5 steps,
@@ -92,6 +93,10 @@ def test_kill_9_then_restart_gives_the_uninterrupted_run(tmp_path, scene, option
     assert s["status"] == "completed" and meta["time"] == meta_ref["time"]
     assert np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
     assert _times(out) == _times(tmp_path / "ref")
+    rows, rows_ref = (read_csv(d / "history.csv") for d in (out, tmp_path / "ref"))
+    if "heating_allowance" in rows_ref[0]:               # the heating's allowance goes on as it was
+        a, a_ref = (np.array([float(r["heating_allowance"]) for r in rr]) for rr in (rows, rows_ref))
+        assert a_ref[-1] > 0.0 and np.abs(a - a_ref).max() <= 1e-8 * a_ref[-1]
 
 
 @pytest.mark.parametrize("scene,options", [LAUWERIER, SCENE2], ids=["lauwerier", "scene2"])

@@ -8,7 +8,7 @@ import pytest
 from petsc4py import PETSc
 
 from petthm import compat
-from petthm.solvers.viconvergence import VIConvergence
+from petthm.solvers.viconvergence import DefaultConvergence, VIConvergence
 
 Reason = PETSc.SNES.ConvergedReason
 
@@ -51,9 +51,10 @@ class _NoisyResidual:
         F.getArray()[:] = X.getArray(readonly=True) - 1.0 + noise
 
 
-def _solve(snes_type: str, install: bool):
+def _noisy_snes(snes_type: str, prefix: str):
+    """A SNES of ``snes_type`` on the noisy residual (J = I, LU, basic line search)."""
     n = 4
-    snes = _snes(atol=1e-12, stol=1e-8)
+    snes = _snes(atol=1e-12, stol=1e-8, prefix=prefix)
     snes.setTolerances(max_it=20)
     snes.setType(snes_type)
     J = PETSc.Mat().createAIJ([n, n], nnz=1, comm=PETSc.COMM_SELF)
@@ -67,6 +68,11 @@ def _solve(snes_type: str, install: bool):
     snes.getKSP().getPC().setType("lu")
     PETSc.Options(snes.getOptionsPrefix()).setValue("snes_linesearch_type", "basic")
     snes.setFromOptions()
+    return snes, n
+
+
+def _solve(snes_type: str, install: bool):
+    snes, n = _noisy_snes(snes_type, "viconv_")
     lower, upper = PETSc.Vec().createSeq(n), PETSc.Vec().createSeq(n)
     lower.set(0.0)
     upper.set(PETSc.INFINITY)
@@ -91,3 +97,26 @@ def test_a_residual_floor_above_atol_converges_on_the_step_length(snes_type):
         assert reason == Reason.DIVERGED_MAX_IT and its == 20
     else:
         assert reason == Reason.CONVERGED_SNORM_RELATIVE
+
+
+def _solve_unbounded(install: bool):
+    """newtonls on the noisy residual: PETSc's SNESConvergedDefault, or its
+    Python copy that the limited heat transport's settling wraps."""
+    snes, n = _noisy_snes("newtonls", "defconv_")
+    if install:
+        DefaultConvergence().install(snes)
+    X = PETSc.Vec().createSeq(n)
+    X.set(3.0)
+    snes.solve(None, X)
+    return snes.getConvergedReason(), snes.getIterationNumber()
+
+
+def test_the_python_default_test_is_petscs():
+    assert _solve_unbounded(True) == _solve_unbounded(False)
+    assert _solve_unbounded(True)[0] == Reason.CONVERGED_SNORM_RELATIVE
+    snes, test = _snes(prefix="defconv_"), DefaultConvergence()
+    assert test.reason(snes, 0, 8.0, 0.0, 1.0) == Reason.CONVERGED_ITERATING
+    assert test.reason(snes, 2, 8.0, 1.0, 5.0e-11) == Reason.CONVERGED_FNORM_RELATIVE
+    assert test.reason(snes, 2, 8.0, 1.0, 2.0e4) == Reason.DIVERGED_DTOL            # 1e4 |F0|
+    assert test.reason(snes, 2, 8.0, 1.0, math.nan) == compat.SNES_DIVERGED_NAN
+    assert test.reason(snes, 2, 8.0, 1.0, 0.5) == Reason.CONVERGED_ITERATING

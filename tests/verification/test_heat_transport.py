@@ -105,8 +105,8 @@ def _excursion(summary, field):
 @pytest.mark.parametrize("scheme", ["upwind", "limited"])
 def test_upwinding_keeps_an_advected_front_in_bounds(tmp_path, scheme):
     """heat_advection at cell Peclet >= 100: SUPG over- and undershoots, the
-    upwinding and the limited scheme do not (Newton: one iteration a step, as
-    for a linear problem)."""
+    upwinding and the limited scheme do not (Newton: one iteration for each
+    solve, as for a linear problem)."""
     _, s = run_petthm("heat_advection", tmp_path / scheme, "-thm_fe_degree", 1,
                       "-thm_heat_transport", scheme)
     _, supg = run_petthm("heat_advection", tmp_path / "supg", "-thm_fe_degree", 1)
@@ -115,9 +115,29 @@ def test_upwinding_keeps_an_advected_front_in_bounds(tmp_path, scheme):
     assert s["cell_peclet_min"] >= 100
     assert _excursion(s, "Tm") <= BOUND_TOLERANCE
     assert _excursion(s, "Tm") < 0.01 * _excursion(supg, "Tm")
-    assert s["rejected_steps"] == 0 and s["snes_iterations"] <= s["steps"] + 2
+    # one Newton iteration for each solve of fixed equations: a step, and each settling pass
+    passes = s["limiter_settling_passes"] or 0
+    assert s["rejected_steps"] == 0 and s["snes_iterations"] <= s["steps"] + passes + 2
     rows = read_csv(tmp_path / scheme / "history.csv")
     assert float(rows[-1]["Tm_min"]) < 21.0                   # the front has entered
+
+
+def test_limited_scheme_settles_long_steps_within_their_own_bounds(tmp_path):
+    """heat_advection with steps of ten times the Courant limit: with the
+    factors of each step's start alone, the front's end state leaves the
+    bounds by 2.8e-4 of the range; settled at the solved state, by no more
+    than the settling tolerance (1e-4 of the range, -thm_heat_limiter_settle)."""
+    runs = {}
+    for settle in (1e-4, 1e9):
+        _, runs[settle] = run_petthm("heat_advection", tmp_path / f"s{settle:g}", "-thm_fe_degree", 1,
+                                     "-thm_heat_transport", "limited", "-thm_dt_initial", 2e6,
+                                     "-thm_heat_limiter_settle", settle)
+    settled, lagged = runs[1e-4], runs[1e9]
+    print("settled", _excursion(settled, "Tm"), settled["limiter_settling_passes"], "start factors only",
+          _excursion(lagged, "Tm"), lagged["limiter_settling_passes"])
+    assert settled["limiter_settling_passes"] > 0 and lagged["limiter_settling_passes"] == 0
+    assert _excursion(settled, "Tm") <= 1e-4
+    assert _excursion(lagged, "Tm") > 10 * _excursion(settled, "Tm")      # the negative control
 
 
 @pytest.mark.parametrize("scheme", ["upwind", "limited"])
@@ -150,6 +170,31 @@ def test_upwinding_keeps_scene3_in_bounds(tmp_path, scheme):
     for f in ("Tf", "Tm"):
         print(f, s["bounds"][f])
         assert _excursion(s, f) <= BOUND_TOLERANCE
+        assert "heating_allowance" not in s["bounds"][f]          # no heating, no allowance for it
+
+
+def test_thermomechanical_heating_stays_within_its_allowance(tmp_path):
+    """Scene 3, case 2, coarse, limited, with -thm_thermomechanical_heating:
+    the rock's strain and pressure heating may take the temperatures out of
+    [Tinj, T0]; at every step the excursion stays within what those terms
+    alone produce by then (the history's heating_allowance, K) and the
+    scheme's own 1e-3 of the range."""
+    _, s = run_petthm("inclined_penny", tmp_path, "-options_file",
+                      "options/scenes/inclined_penny_coarse.opts", "-thm_scene3_case", 2,
+                      "-thm_heat_transport", "limited", "-thm_thermomechanical_heating", "true")
+    assert s["status"] == "completed"
+    rows = read_csv(tmp_path / "history.csv")
+    allowance = [float(r["heating_allowance"]) for r in rows]
+    assert allowance[0] == 0.0 and allowance[-1] > 0.0
+    assert all(b >= a for a, b in zip(allowance, allowance[1:], strict=False))      # a running sum
+    for f in ("Tf", "Tm"):
+        b = s["bounds"][f]
+        print(f, b)
+        assert b["heating_allowance"] == pytest.approx(allowance[-1], rel=1e-9)
+        span = b["upper"] - b["lower"]
+        for r, a in zip(rows, allowance, strict=True):
+            out = max(0.0, float(r[f"{f}_max"]) - b["upper"], b["lower"] - float(r[f"{f}_min"]))
+            assert out <= a + BOUND_TOLERANCE * span, (r["step"], out, a)
 
 
 def test_upwinding_converges_at_first_order_on_the_heat_mms(tmp_path):

@@ -79,7 +79,7 @@ from petthm.physics.kernels.flow import (
     storage_rate,
     unit_darcy,
 )
-from petthm.physics.kernels.limiter import FluxLimiter
+from petthm.physics.kernels.limiter import SETTLE, FluxLimiter
 from petthm.physics.kernels.transport import StoredWater, Upwinding, stored_water_terms, upwinding_terms
 from petthm.physics.kernels.wallflux import SIDES, WallConduction, supg_g3, wall_flux
 
@@ -118,6 +118,7 @@ class Heat:
     wall: WallConduction | None = None      # the rock's wall conduction in R (kernels/wallflux.py)
     upwind: bool = False            # algebraic upwinding (kernels/transport.py) instead of SUPG
     limited: bool = False           # the upwinding's diffusion flux-corrected (kernels/limiter.py)
+    settle: float = SETTLE          # the limiter's settling tolerance (kernels/limiter.py)
 
     @property
     def advects(self) -> bool:
@@ -421,7 +422,7 @@ def heat_terms(h: Heat) -> tuple[list, list]:
         if capacity:
             jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), None, lumped)
     if h.upwind:
-        limiter = FluxLimiter() if h.limited else None
+        limiter = FluxLimiter(settle=h.settle) if h.limited else None
         u = Upwinding(hh, heat_point, limiter)
         if limiter is not None:
             limiter.bind(u)

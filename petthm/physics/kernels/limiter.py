@@ -34,15 +34,27 @@ linear T is not limited in the interior of a uniform 1D mesh (P_i = q_i
 |dT| / 2 there).
 
 The limiter is evaluated at the state at the start of the step (backward
-Euler's x - x_dot / shift), so that within a step alpha is a constant and
-the step's equations are those of a fixed linear combination of the
-upwinded and the Galerkin operators: Newton keeps its quadratic
+Euler's x - x_dot / shift), so that while Newton solves the step alpha is a
+constant and the step's equations are those of a fixed linear combination
+of the upwinded and the Galerkin operators: Newton keeps its quadratic
 convergence and the Jacobian is exact (with alpha from the state being
 solved for, alpha switches between Newton iterates, which then cycle;
-theory manual, "Discrete bounds").  The bounds are those of the step's
-start: a new extremum can form only within a step, by what the flux
-correction of that step adds beyond them, which the bounds monitor
-(``run/ranges.py``) measures on every step.
+theory manual, "Limited flux correction").  The start's bounds do not
+bound the step's end: with long steps the solved state's fluxes can exceed
+the room of its own neighbourhoods, an extremum forms, the next step
+(limited at it) takes it away, and the temperature oscillates from step to
+step.  So a step is settled at its solved state (``tighten``, called from
+Newton's convergence test, ``solvers/settling.py``): at a node that is an
+extreme of the solved state's neighbourhood (no room: Q+ = 0 or Q- = 0)
+the limited fluxes must not push further beyond it; where they do by more
+than ``SETTLE`` of the temperature range (their sum over q_i), the factors
+of the node's pairs fall to the solved state's, and Newton solves the
+step's new equations on from where it stands.  alpha only falls within a
+step; after ``MAX_TIGHTENINGS`` passes the pairs still in excess are
+upwinded, so that the passes end.  The accepted state satisfies Zalesak's
+condition at every extreme of its own (to ``SETTLE``), which is what the
+discrete maximum principle needs: the node where the state is largest is
+such an extreme, and its row is the upwinded one there.
 
 The sums run over all cells of the region: a pass before the assembly
 (``__call__``, the assembly's ``prepare`` hook), the nodal sums and
@@ -72,11 +84,22 @@ GAMMA = 1.0
 FLOOR = 1e-6
 #: the scaled unknowns of two evaluations' start states differ by no more than this within a step
 START_ROUNDOFF = 1e-12
+#: a solved state settles its step when the limited fluxes push none of its local extremes further
+#: by more than this fraction of the state's temperature range (``tighten``;
+#: -thm_heat_limiter_settle)
+SETTLE = 1e-4
+#: passes of lowering alpha in one step, after which the pairs still in excess are upwinded
+MAX_TIGHTENINGS = 6
 
 
 def _logical_and():
     from mpi4py import MPI
     return MPI.LAND
+
+
+def _logical_or():
+    from mpi4py import MPI
+    return MPI.LOR
 
 
 def step_start(xl, xdl, shift):
@@ -89,13 +112,15 @@ class FluxLimiter:
     """The limiter of one region's upwinded heat transport; ``keep`` holds
     1 - alpha_ij of every element of the region (ncells, nb, nb)."""
 
-    def __init__(self, gamma: float = GAMMA):
-        self.gamma = gamma
+    def __init__(self, gamma: float = GAMMA, settle: float = SETTLE):
+        self.gamma, self.settle = gamma, settle
         self.upwinding: Upwinding | None = None
         self.keep: np.ndarray | None = None
         self._vecs = None
         self._dirichlet = None
         self._start = None                    # (the start state, t, shift) of ``keep``
+        self.t = self.shift = 0.0             # the step's time and 1/dt
+        self.tightenings = 0                  # passes of ``tighten`` in this step
 
     def bind(self, u: Upwinding) -> None:
         self.upwinding = u
@@ -104,25 +129,70 @@ class FluxLimiter:
         xl = step_start(xl, xdl, shift)
         if self._same_start(asm, xl, t, shift):
             return
+        self.t, self.shift, self.tightenings = t, shift, 0
+        self.keep = self._keep(asm, xl, xdl, t, shift)
+
+    def _keep(self, asm, xl, xdl, t, shift) -> np.ndarray:
+        """1 - alpha_ij of every element for the state ``xl`` (ncells, nb, nb)."""
+        nodal, pairs = self._nodal(asm, xl, xdl, t, shift)
+        return self._keep_where(asm, nodal, pairs, np.ones(asm.disc.nlocal, dtype=bool))
+
+    def _nodal(self, asm, xl, xdl, t, shift):
+        """The nodal sums of the state ``xl`` (completed across ranks) and, per
+        batch of cells, (cells, dofs, g_ij, d_ij, T)."""
         u = self.upwinding
-        n = asm.disc.nlocal
-        nodal = _NodalSums(n)
+        nodal = _NodalSums(asm.disc.nlocal)
         pairs = []
         for cells in asm.chunks():
             D, dT, T = upwinding_diffusion(u, CellContext(asm, cells, xl, xdl, t, shift))
             idx = asm.dofs(u.heat.T)[cells]
-            g = D * dT
-            nodal.add(idx, g, D, T)
-            pairs.append((cells, idx))
+            nodal.add(idx, D * dT, D, T)
+            pairs.append((cells, idx, D * dT, D, T))
         nodal.complete(asm, self._vectors(asm))
+        return nodal, pairs
+
+    def _keep_where(self, asm, nodal, pairs, nodes) -> np.ndarray:
+        """1 - alpha_ij from the factors R of ``nodal`` on the pairs with a
+        node in ``nodes`` (a mask of the local dofs), 0 elsewhere."""
         R = np.minimum(*nodal.ratios(self.gamma))
         R[self._prescribed(asm)] = 1.0
         nb = pairs[0][1].shape[1] if pairs else 0
-        keep = np.empty((asm.mesh.ncells, nb, nb))
-        for cells, idx in pairs:
+        keep = np.zeros((asm.mesh.ncells, nb, nb))
+        for cells, idx, *_ in pairs:
             r = R[idx]
-            keep[cells] = 1.0 - np.minimum(r[:, :, None], r[:, None, :])
-        self.keep = keep
+            touched = nodes[idx]
+            keep[cells] = np.where(touched[:, :, None] | touched[:, None, :],
+                                   1.0 - np.minimum(r[:, :, None], r[:, None, :]), 0.0)
+        return keep
+
+    def tighten(self, asm, xl) -> bool:
+        """At a solved state ``xl`` of the step: the nodes that are extremes
+        of the state's neighbourhoods (no room) and that the step's limited
+        fluxes push further beyond, their sum over q_i (a temperature) more
+        than ``settle`` times the state's temperature range.  On their pairs
+        alpha_ij falls to the factors of that state (alpha only falls within
+        a step), and the step's equations are to be solved again (True);
+        after ``MAX_TIGHTENINGS`` such passes those pairs are upwinded
+        (alpha = 0).  Collective."""
+        xdl = (xl - self._start[0]) * self.shift
+        nodal, pairs = self._nodal(asm, xl, xdl, self.t, self.shift)
+        applied = _NodalSums(asm.disc.nlocal)
+        for cells, idx, g, D, T in pairs:
+            applied.add(idx, (1.0 - self.keep[cells]) * g, D, T)
+        applied.complete(asm, self._vectors(asm))
+        excess = nodal.excess(applied)
+        excess[self._prescribed(asm)] = 0.0
+        comm = asm.disc.mesh.dm.comm.tompi4py()
+        span = nodal.span(comm)
+        over = excess > self.settle * span
+        if not comm.allreduce(bool(over.any()), op=_logical_or()):
+            return False
+        self.tightenings += 1
+        keep = self._keep_where(asm, nodal, pairs, over)
+        if self.tightenings >= MAX_TIGHTENINGS:
+            keep = np.where(keep > 0.0, 1.0, keep)
+        self.keep = np.maximum(self.keep, keep)
+        return True
 
     def _same_start(self, asm, start, t, shift) -> bool:
         """Whether ``keep`` belongs to this step's start already (every
@@ -196,6 +266,22 @@ class _NodalSums:
             sf.bcastBegin(MPI.DOUBLE, root, got, MPI.REPLACE)
             sf.bcastEnd(MPI.DOUBLE, root, got, MPI.REPLACE)
             setattr(self, name, np.where(free & self.touched, got, a))
+
+    def excess(self, applied: _NodalSums) -> np.ndarray:
+        """Per local dof that is an extreme of its neighbourhood (no room,
+        Q+ = 0 or Q- = 0), the fluxes ``applied`` towards beyond it (their
+        P+ or -P-) over q_i: a temperature (0 elsewhere and where q_i = 0)."""
+        q = np.where(self.q > 0.0, self.q, 1.0)
+        up = np.where(self.tmax <= self.T, applied.pplus / q, 0.0)
+        down = np.where(self.tmin >= self.T, -applied.pminus / q, 0.0)
+        return np.where(self.q > 0.0, np.maximum(np.maximum(up, down), 0.0), 0.0)
+
+    def span(self, comm) -> float:
+        """The range of T over the region, on all ranks together."""
+        from mpi4py import MPI
+        hi = float(self.tmax[self.touched].max()) if self.touched.any() else -np.inf
+        lo = float(self.tmin[self.touched].min()) if self.touched.any() else np.inf
+        return comm.allreduce(hi, op=MPI.MAX) - comm.allreduce(lo, op=MPI.MIN)
 
     def ratios(self, gamma):
         """R+ and R- per local dof: Q/P written as gamma times the room over

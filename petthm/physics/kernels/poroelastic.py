@@ -118,6 +118,25 @@ def elastic_terms(el: Elastic) -> tuple[list, list]:
     return res, jac
 
 
+def _heating_rate(el: Elastic, p: str | None, porosity_expansion: float, ctx):
+    """beta_s K d(div u)/dt - phi beta_f dp/dt at the points (nc, nq), 1/s."""
+    r = el.bulk * el.thermal_expansion * np.trace(_grad_dot(ctx, el.u), axis1=2, axis2=3)
+    if porosity_expansion and p is not None:
+        r = r - porosity_expansion * ctx.dot(p)[..., 0]
+    return r
+
+
+def heating_power(el: Elastic, T: str, p: str | None = None, porosity_expansion: float = 0.0):
+    """The heating of ``heating_terms`` as a power density (W/m3, positive
+    where it heats): ``power(ctx)`` at the points (nc, nq), from the state's
+    temperature (K) and rates."""
+    rate = partial(_heating_rate, el, p, porosity_expansion if p is not None else 0.0)
+
+    def power(ctx):
+        return -ctx.value(T)[..., 0] * rate(ctx)
+    return power
+
+
 def heating_terms(el: Elastic, T: str, p: str | None = None,
                   porosity_expansion: float = 0.0) -> tuple[list, list]:
     """Thermo-mechanical heating of theory manual, "Equations: rock heat" in the heat equation of ``T``:
@@ -129,12 +148,7 @@ def heating_terms(el: Elastic, T: str, p: str | None = None,
     strain term only).  Exact Jacobians with respect to T, u and p."""
     bK = el.bulk * el.thermal_expansion
     pe = porosity_expansion if p is not None else 0.0
-
-    def rate(ctx):
-        r = bK * np.trace(_grad_dot(ctx, el.u), axis1=2, axis2=3)
-        if pe:
-            r = r - pe * ctx.dot(p)[..., 0]
-        return r
+    rate = partial(_heating_rate, el, p, pe)
 
     def f0(ctx):
         return (ctx.value(T)[..., 0] * rate(ctx))[..., None]
