@@ -2,11 +2,14 @@
 # The test command of the README (make test):
 #   1. the linter (ruff, settings in pyproject.toml) over everything tracked;
 #   2. the manual (make docs: Sphinx, warnings as errors) into build/docs;
-#   3. the default suite with the set-up environment (.venv);
+#   3. the default suite with the set-up environment (.venv), spread over one
+#      pytest-xdist worker per core (PETTHM_TEST_WORKERS: another count; 0 runs
+#      the tests in this process);
 #   4. in CI (CI=true) or with PETTHM_TEST_NEWEST=1, the groups of the suite
 #      whose code paths differ between PETSc versions against PETSc 3.26.1 +
 #      petsc4py built from PyPI into a cached virtual environment (~10 min the
-#      first time, then reused): ${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}.
+#      first time, then reused): ${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1};
+#      the build starts at the lowest priority beside steps 1-3.
 #      They are tests/unit (compat: COO, sections, the cohesive split),
 #      tests/interface (options, output, errors), tests/parallel, tests/solvers
 #      and the contact, friction and Scene 3 tests; the verification of the heat, flow,
@@ -19,20 +22,38 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+workers=(-n "${PETTHM_TEST_WORKERS:-auto}")
+newest=false
+if [ "${CI:-}" = true ] || [ "${PETTHM_TEST_NEWEST:-0}" = 1 ]; then newest=true; fi
+venv=${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}
+if $newest; then
+  # built (or found) at the lowest priority while the first pass runs: the cycles the tests leave idle
+  mkdir -p "$(dirname "$venv")"
+  build_log=$(mktemp)
+  setsid nice -n 19 bash scripts/install_petsc_pypi.sh "$venv" > "$build_log" 2>&1 &
+  build=$!
+  # a failed first pass ends the build too (its own process group)
+  trap 'kill -- -"$build" 2>/dev/null || true' EXIT
+fi
 .venv/bin/python -m ruff check .
 start=$(date +%s)
 .venv/bin/python -m sphinx -W --keep-going -q -b html docs build/docs
 echo "== the manual: $(( $(date +%s) - start )) s (build/docs/index.html) =="
 start=$(date +%s)
-.venv/bin/python -m pytest -q "$@"
+.venv/bin/python -m pytest -q "${workers[@]}" "$@"
 echo "== default suite: $(( $(date +%s) - start )) s =="
-if [ "${CI:-}" = true ] || [ "${PETTHM_TEST_NEWEST:-0}" = 1 ]; then
-  venv=${PETTHM_NEWEST_VENV:-$HOME/.cache/petthm/venv-petsc-3.26.1}
-  mkdir -p "$(dirname "$venv")"
+if $newest; then
   echo "== the PETSc-dependent groups against PETSc 3.26.1 (PyPI build in $venv) =="
-  bash scripts/install_petsc_pypi.sh "$venv"
   start=$(date +%s)
-  "$venv/bin/python" -m pytest -q tests/unit tests/interface tests/parallel tests/solvers \
+  if ! wait "$build"; then
+    cat "$build_log"
+    echo "petthm: error: the PyPI build of PETSc 3.26.1 failed (its log above)" >&2
+    exit 1
+  fi
+  cat "$build_log"
+  echo "== the build's remainder after the first pass: $(( $(date +%s) - start )) s =="
+  start=$(date +%s)
+  "$venv/bin/python" -m pytest -q "${workers[@]}" tests/unit tests/interface tests/parallel tests/solvers \
       tests/verification/test_contact.py tests/verification/test_friction.py tests/verification/test_scene3.py \
       --deselect "tests/verification/test_contact.py::test_sneddon_opening[penny_3d]" \
       --deselect "tests/interface/test_restart.py::test_kill_9_then_restart_gives_the_uninterrupted_run[scene2]" \

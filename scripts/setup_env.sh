@@ -33,7 +33,7 @@ PY
 }
 
 if [ -x "$VENV/bin/python" ] && has_petsc4py "$VENV/bin/python" && ! old_numpy "$VENV/bin/python" \
-   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, mpi4py, ruff, iapws, sphinx, myst_parser, pydata_sphinx_theme" 2>/dev/null; then
+   && "$VENV/bin/python" -c "import petthm, gmsh, h5py, meshio, scipy, sympy, pytest, xdist, mpi4py, ruff, iapws, sphinx, myst_parser, pydata_sphinx_theme" 2>/dev/null; then
   exit 0
 fi
 
@@ -56,7 +56,7 @@ else
 fi
 PIP="$VENV/bin/python -m pip"
 need=""
-for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pytest mpi4py:mpi4py ruff:ruff iapws:iapws \
+for mod in gmsh:gmsh h5py:h5py meshio:meshio scipy:scipy sympy:sympy pytest:pytest xdist:pytest-xdist mpi4py:mpi4py ruff:ruff iapws:iapws \
            sphinx:sphinx myst_parser:myst-parser pydata_sphinx_theme:pydata-sphinx-theme; do
   "$VENV/bin/python" -c "import ${mod%%:*}" 2>/dev/null || need="$need ${mod#*:}"
 done

@@ -15,7 +15,20 @@ MPI_ENV = dict(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_pml="ob1")
 
 
+#: what an MPI singleton (a process that initialised MPI without mpiexec) puts in its environment: a
+#: child mpiexec that inherits it fails without a word
+SINGLETON_PREFIXES = ("PMIX_", "OMPI_COMMAND", "OMPI_APP_CTX", "OMPI_MCA_ess", "OMPI_MCA_orte",
+                      "OMPI_MCA_pmix")
+
+
 def pytest_configure(config):
+    """MPI (petsc4py) in the process that runs the tests; with pytest-xdist
+    (``-n``) in each worker only, so that the workers and the mpiexec they
+    start inherit no singleton's environment."""
+    if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
+        return
+    for name in [k for k in os.environ if k.startswith(SINGLETON_PREFIXES)]:
+        del os.environ[name]
     import petsc4py
     petsc4py.init([sys.argv[0]])
 

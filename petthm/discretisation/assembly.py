@@ -27,7 +27,6 @@ solver tolerances are dimensionless.
 """
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +34,7 @@ import numpy as np
 from petthm.discretisation import fe, sparsity
 from petthm.discretisation.context import CellContext, FacetContext, physical_gradient
 from petthm.discretisation.fields import Adjacent, Discretisation, FieldRef
+from petthm.discretisation.functionals import Functionals
 from petthm.discretisation.mapping import adjacent_gradients, reference_flux
 from petthm.discretisation.model import MATRIX, Model, Region
 from petthm.discretisation.p1blocks import constant_gradient_terms
@@ -50,21 +50,6 @@ class FieldScale:
     rscale: float = 1.0
 
 
-class _Tab:
-    """Reference tabulation of one element degree (Lagrange, or its dual
-    basis) on one rule."""
-
-    def __init__(self, dim, degree, points, dual=False):
-        t = (fe.tabulate_dual if dual else fe.tabulate)(dim, degree, points)
-        self.phi, self.dphi, self.hess = t.phi, t.dphi, t.hess
-        nq, nb = t.phi.shape
-        # D[q*d+k, i] = dphi[q, i, k]
-        self.D = np.ascontiguousarray(t.dphi.transpose(0, 2, 1).reshape(nq * dim, nb))
-        # P1 on a simplex: the gradients are the same at every point (an affine
-        # cell's physical gradients are then constant over the cell)
-        self.constant_grad = bool(np.allclose(t.dphi, t.dphi[:1], rtol=0.0, atol=1e-13))
-
-
 @dataclass
 class _FacetBatch:
     """Boundary facets that share the local facet number within their cell."""
@@ -75,7 +60,16 @@ class _FacetBatch:
     tabs: dict
 
 
-class Assembler:
+def _distinct_prepares(terms):
+    """The terms' ``prepare`` hooks, each once (terms may share one)."""
+    seen = set()
+    for term in terms:
+        if term.prepare is not None and id(term.prepare) not in seen:
+            seen.add(id(term.prepare))
+            yield term.prepare
+
+
+class Assembler(Functionals):
     """Residual and Jacobian of a ``Model`` on a ``Discretisation``."""
 
     def __init__(self, disc: Discretisation, model: Model, scales: dict[str, FieldScale],
@@ -106,7 +100,8 @@ class Assembler:
         else:
             self.rule = fe.rule(dim, quad_degree or 2 * pmax)
         duals = (False, True) if region.dual else (False,)
-        self._tabs = {(p, dual): _Tab(dim, p, self.rule.points, dual) for p in (1, 2) for dual in duals}
+        self._tabs = {(p, dual): fe.ReferenceTable(dim, p, self.rule.points, dual)
+                      for p in (1, 2) for dual in duals}
         self.W = np.abs(self.mesh.detJ)[:, None] * self.rule.weights[None, :]
         self._ref_cache = {}
         self._basis_gradients = {}
@@ -137,7 +132,7 @@ class Assembler:
         f = self.disc.field(name)
         return f.degree, self.region.dual and isinstance(name, str) and f.region == self.base
 
-    def tab(self, name) -> _Tab:
+    def tab(self, name) -> fe.ReferenceTable:
         return self._tabs[self.basis(name)]
 
     def basis_gradients(self, name, cells) -> np.ndarray:
@@ -180,7 +175,7 @@ class Assembler:
                 continue
             pts = fe.facet_points(m.dim, f, frule.points)
             w = measure[sel, None] * frule.weights[None, :] / fe.REFERENCE_VOLUME[m.dim - 1]
-            tabs = {p: _Tab(m.dim, p, pts) for p in (1, 2)}
+            tabs = {p: fe.ReferenceTable(m.dim, p, pts) for p in (1, 2)}
             batches.append(_FacetBatch(cells[sel], pts, w, normals[sel], tabs))
         return batches
 
@@ -292,21 +287,16 @@ class Assembler:
         """Each distinct ``prepare`` of the terms that can be tightened at a
         solved state (``prepare.tighten(asm, xl)``, the flux limiter): whether
         any changed the step's equations (collective)."""
-        done, changed = set(), False
-        for term in self.model.residuals:
-            pre = term.prepare
-            if pre is not None and hasattr(pre, "tighten") and id(pre) not in done:
-                done.add(id(pre))
+        changed = False
+        for pre in _distinct_prepares(self.model.residuals):
+            if hasattr(pre, "tighten"):
                 changed = pre.tighten(self, xl) or changed
         return changed
 
     def _prepare(self, terms, xl, xdl, t, shift):
         """Each distinct ``prepare`` of the terms, once, before the cells."""
-        done = set()
-        for term in terms:
-            if term.prepare is not None and id(term.prepare) not in done:
-                done.add(id(term.prepare))
-                term.prepare(self, xl, xdl, t, shift)
+        for pre in _distinct_prepares(terms):
+            pre(self, xl, xdl, t, shift)
 
     def _constant_gradient_flux(self, name, cells, W, f1):
         """sum_q W grad phi_i . f1 for test functions with gradients constant
@@ -472,36 +462,3 @@ class Assembler:
         if jb.element is not None:
             K += np.asarray(jb.element(ctx)).reshape(K.shape)
         return K.reshape(nc, m, n, nbF, nbG)
-
-    # -- functionals ------------------------------------------------------------
-    def integrate(self, xl, integrand: Callable, t: float = 0.0) -> float:
-        """Global integral over this region of ``integrand(ctx)`` (nc, nq), SI."""
-        acc = 0.0
-        for cells in self.chunks():
-            ctx = CellContext(self, cells, xl, xl, t)
-            acc += float(np.sum(self.W[cells] * np.broadcast_to(integrand(ctx), self.W[cells].shape)))
-        return self.mesh.dm.comm.tompi4py().allreduce(acc)
-
-    def error_norms(self, xl, name: str, exact: Callable, exact_grad: Callable, t: float,
-                    degree: int = 6) -> dict[str, float]:
-        """Global L2 and H1-seminorm errors and norms of the exact field (SI)."""
-        m, f = self.mesh, self.disc.field(name)
-        rule = fe.rule(m.rdim, max(degree, 2 * f.degree + 2))
-        tab = _Tab(m.rdim, f.degree, rule.points)
-        sc = self.scale(name)
-        acc = np.zeros(4)
-        for cells in self.chunks():
-            X = xl[self.dofs(name)[cells]].reshape(-1, tab.phi.shape[1], f.ncomp) * sc.scale + sc.offset
-            x = m.x0[cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[cells], rule.points)
-            W = np.abs(m.detJ[cells])[:, None] * rule.weights
-            u = tab.phi @ X
-            G = physical_gradient((tab.D @ X).reshape(len(X), -1, m.rdim, f.ncomp), m.Jinv[cells])
-            ue = np.asarray(exact(x, t)).reshape(u.shape)
-            ge = np.asarray(exact_grad(x, t)).reshape(G.shape)
-            acc += [np.sum(W[:, :, None] * (u - ue) ** 2), np.sum(W[:, :, None] * ue ** 2),
-                    np.sum(W[:, :, None, None] * (G - ge) ** 2), np.sum(W[:, :, None, None] * ge ** 2)]
-        acc = m.dm.comm.tompi4py().allreduce(acc)
-        return {"l2": float(np.sqrt(acc[0])), "l2_exact": float(np.sqrt(acc[1])),
-                "h1": float(np.sqrt(acc[2])), "h1_exact": float(np.sqrt(acc[3])),
-                "l2_rel": float(np.sqrt(acc[0] / max(acc[1], 1e-300))),
-                "h1_rel": float(np.sqrt(acc[2] / max(acc[3], 1e-300)))}

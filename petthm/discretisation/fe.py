@@ -246,3 +246,18 @@ def nodal_rule(dim: int, degree: int) -> Rule:
     phi = tabulate(dim, degree, r.points).phi
     weights = modified_basis(dim, degree) @ (phi.T @ r.weights)
     return Rule(reference_nodes(dim, degree), weights, degree)
+
+
+class ReferenceTable:
+    """Reference tabulation of one element degree (Lagrange, or its dual
+    basis) on one rule."""
+
+    def __init__(self, dim, degree, points, dual=False):
+        t = (tabulate_dual if dual else tabulate)(dim, degree, points)
+        self.phi, self.dphi, self.hess = t.phi, t.dphi, t.hess
+        nq, nb = t.phi.shape
+        # D[q*d+k, i] = dphi[q, i, k]
+        self.D = np.ascontiguousarray(t.dphi.transpose(0, 2, 1).reshape(nq * dim, nb))
+        # P1 on a simplex: the gradients are the same at every point (an affine
+        # cell's physical gradients are then constant over the cell)
+        self.constant_grad = bool(np.allclose(t.dphi, t.dphi[:1], rtol=0.0, atol=1e-13))

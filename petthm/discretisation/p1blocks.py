@@ -11,7 +11,7 @@ import numpy as np
 def constant_gradient_terms(self, jb, ctx, cells, fast) -> np.ndarray:
     """The g1, g2, g3 terms (``fast``: which) of a block whose test (g2),
     trial (g1) or both (g3) functions have gradients constant over the
-    cell (P1 on simplices, ``_Tab.constant_grad``), as (nc, m, n, nbF,
+    cell (P1 on simplices, ``fe.ReferenceTable.constant_grad``), as (nc, m, n, nbF,
     nbG).  The same integrals as the reference-tensor path, summed in
     another order: the kernel over the quadrature points first, then the
     cell's physical basis gradients B (nc, nb, d) applied once,
