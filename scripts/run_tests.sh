@@ -30,10 +30,12 @@ if $newest; then
   # built (or found) at the lowest priority while the first pass runs: the cycles the tests leave idle
   mkdir -p "$(dirname "$venv")"
   build_log=$(mktemp)
-  setsid nice -n 19 bash scripts/install_petsc_pypi.sh "$venv" > "$build_log" 2>&1 &
+  # (in this session: the kernel's nice levels rank processes within a session's scheduling group)
+  nice -n 19 bash scripts/install_petsc_pypi.sh "$venv" > "$build_log" 2>&1 &
   build=$!
-  # a failed first pass ends the build too (its own process group)
-  trap 'kill -- -"$build" 2>/dev/null || true' EXIT
+  # a failed first pass ends the build too, with the processes it started
+  stop_tree() { local child; for child in $(pgrep -P "$1"); do stop_tree "$child"; done; kill "$1" 2>/dev/null || true; }
+  trap 'stop_tree "$build"' EXIT
 fi
 .venv/bin/python -m ruff check .
 start=$(date +%s)

@@ -294,8 +294,9 @@ class Run:
         t_resume = resume["time"] if resume else None
         writers = [(FieldWriter(disc, self.outdir, d, stems[r, d], r, resume_at=t_resume), fields)
                    for (r, d), fields in groups.items()]
-        columns = (["step", "time", "dt", "snes_its", "ksp_its", "wall"] + list(self.scene.history_columns)
-                   + scene_monitor.ranges.columns())
+        passes = ["settling_passes"] if problem.has_tightening() else []    # the limited heat transport
+        columns = (["step", "time", "dt", "snes_its", "ksp_its", *passes, "wall"]
+                   + list(self.scene.history_columns) + scene_monitor.ranges.columns())
         history = History(os.path.join(self.outdir, "history.csv"), columns, self.comm, append=bool(resume))
         return writers, history
 
@@ -382,7 +383,7 @@ class Run:
         summary["solver_costs"] = solver_costs()
         summary["peak_memory_mb"] = peak_memory_mb()
         summary["pc_rebuilds_forced"] = stepper.reuse.rebuilds if stepper.reuse is not None else None
-        summary["limiter_settling_passes"] = stepper.settling.passes if stepper.settling is not None else None
+        summary["limiter_settling_passes"] = steps.whole_run_settling_passes()
         try:
             write_summary(os.path.join(self.outdir, "summary.json"), summary, comm)
         except WriteFailure as e:

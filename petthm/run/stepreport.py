@@ -31,6 +31,8 @@ class StepReport:
         self.stepper = None
         self.stop = checkpoint.StopRequest()
         self.its = (0, 0)
+        self.settles = problem.has_tightening()        # the limited heat transport: passes per step
+        self.passes = 0
         self.wall = time.perf_counter()
         self.last_t = 0.0
         self.rows = 0
@@ -49,20 +51,33 @@ class StepReport:
             w.write(t, out)
         run._pop("output", s, t1)
 
-    def whole_run_iterations(self) -> tuple[int, int]:
-        """(Newton, Krylov) iterations of the whole run: history.csv's sums
-        (a restart's file holds the rows of the run it continues)."""
+    def _whole_run_sums(self, columns) -> tuple[int, ...] | None:
+        """history.csv's sums of ``columns`` over the whole run (a restart's
+        file holds the rows of the run it continues); None where the file
+        lacks them (collective)."""
         import csv
         totals = None
         if self.run.comm.rank == 0:
             try:
                 with open(self.history.path, newline="") as f:
                     rows = list(csv.DictReader(f))
-                totals = tuple(sum(int(float(r[k] or 0)) for r in rows) for k in ("snes_its", "ksp_its"))
-            except (OSError, KeyError, ValueError):
+                totals = tuple(sum(int(float(r[k] or 0)) for r in rows) for k in columns)
+            except (OSError, KeyError, ValueError, TypeError):
                 totals = None
-        totals = self.run.mpi.bcast(totals, root=0)
+        return self.run.mpi.bcast(totals, root=0)
+
+    def whole_run_iterations(self) -> tuple[int, int]:
+        """(Newton, Krylov) iterations of the whole run."""
+        totals = self._whole_run_sums(("snes_its", "ksp_its"))
         return totals if totals is not None else self.stepper.iterations()
+
+    def whole_run_settling_passes(self) -> int | None:
+        """The limited heat transport's settling passes of the whole run
+        (None without it)."""
+        if not self.settles:
+            return None
+        totals = self._whole_run_sums(("settling_passes",))
+        return totals[0] if totals is not None else self.stepper.settling.passes
 
     def __call__(self, step, t, X):
         run, stepper, control = self.run, self.stepper, self.control
@@ -74,8 +89,11 @@ class StepReport:
         self.its = (snes_its, ksp_its)
         dt = t - self.last_t
         self.last_t = t
-        row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk,
-               "wall": time.perf_counter() - run.t_start + self.wall_before}
+        row = {"step": step, "time": t, "dt": dt, "snes_its": dn, "ksp_its": dk}
+        if self.settles:
+            passes = stepper.settling.passes if stepper else 0
+            row["settling_passes"], self.passes = passes - self.passes, passes
+        row["wall"] = time.perf_counter() - run.t_start + self.wall_before
         row.update(self.scene_monitor(self.problem, t, X))
         if self.resume and t == self.t_resume:            # the state the restart starts from is written
             return

@@ -100,7 +100,8 @@ def test_a_damaged_checkpoint_or_field_file_is_a_one_line_error_naming_it(finish
     assert "options of the original run" not in msg
 
 
-#: scenes whose monitors gather over the steps (their ``carried`` state): small, fast settings
+#: scenes whose monitors gather over the steps (their ``carried`` state): small, fast settings (a
+#: variant in brackets after the scene's name)
 WHOLE_RUN = {
     "lauwerier": (LAUWERIER[1:], 40),
     "terzaghi": (("-thm_fe_degree", 1), 6),
@@ -108,6 +109,7 @@ WHOLE_RUN = {
     "leakoff_1d": ((), 15),
     "fracture_inflation": (("-thm_fe_degree", 1), 3),
     "heat_advection": (("-thm_fe_degree", 1), 20),
+    "heat_advection[limited]": (("-thm_fe_degree", 1, "-thm_heat_transport", "limited"), 20),  # passes
     "thermal_stress": (("-thm_fe_degree", 1), 10),
     "friction_patch": (("-thm_fe_degree", 1), 2),
     "contact_patch": (("-thm_fe_degree", 1), 2),
@@ -141,8 +143,10 @@ def test_a_restarted_run_reports_the_whole_run(tmp_path, scene):
     with -thm_restart: summary.json equals the uninterrupted run's (the
     scene's monitors over all steps: worst values, samples, peaks, the
     initial volume; errors against the reference at the end), and the
-    iterations are history.csv's sums over all steps."""
+    iterations and the limited heat transport's settling passes are
+    history.csv's sums over all steps."""
     options, steps = WHOLE_RUN[scene]
+    scene = scene.split("[")[0]
     options = (*options, "-thm_pc_reuse", "off")       # one solver path in every run (auto decides by timing)
     _, ref = run_petthm(scene, tmp_path / "ref", *options)
     proc, s = run_petthm(scene, tmp_path / "run", *options, "-ts_max_steps", steps, check=False)
@@ -153,8 +157,10 @@ def test_a_restarted_run_reports_the_whole_run(tmp_path, scene):
           {k: v for k, v in ref.items() if k not in PER_PROCESS})
     rows = read_text(tmp_path / "run" / "history.csv").splitlines()
     header = rows[0].split(",")
-    its = [sum(int(float(r.split(",")[header.index(k)])) for r in rows[1:]) for k in ("snes_its", "ksp_its")]
-    assert [s["snes_iterations"], s["ksp_iterations"]] == its
+    sums = {k: sum(int(float(r.split(",")[header.index(k)])) for r in rows[1:])
+            for k in ("snes_its", "ksp_its", "settling_passes") if k in header}
+    assert [s["snes_iterations"], s["ksp_iterations"]] == [sums["snes_its"], sums["ksp_its"]]
+    assert s["limiter_settling_passes"] == sums.get("settling_passes")
     if "error" in ref:
         assert "errors against the reference:" in proc.stdout
     assert read_json(tmp_path / "run" / "summary.json")["status"] == "completed"
