@@ -18,7 +18,11 @@
 #      the 3D Sneddon penny crack (a P2 LU solve of 2.5 min with PETSc's own
 #      LU; the 2D crack covers the contact path), the SLURM chain (shell
 #      stand-ins, no PETSc) and Scene 2's kill -9 restarts (the checkpoint
-#      I/O is lauwerier's, tested on both passes).
+#      I/O is lauwerier's, tested on both passes); so do the predictor's
+#      iteration counts (a Python extrapolation over Vec operations), Scene 2's
+#      default path on two ranks (its block path on two ranks runs on both) and
+#      Scene 3's flow-and-heat split against its control (the coupled MMS takes
+#      the same recipe on both).  Both passes print their slowest tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -42,7 +46,7 @@ start=$(date +%s)
 .venv/bin/python -m sphinx -W --keep-going -q -b html docs build/docs
 echo "== the manual: $(( $(date +%s) - start )) s (build/docs/index.html) =="
 start=$(date +%s)
-.venv/bin/python -m pytest -q "${workers[@]}" "$@"
+.venv/bin/python -m pytest -q "${workers[@]}" --durations=15 "$@"
 echo "== default suite: $(( $(date +%s) - start )) s =="
 if $newest; then
   echo "== the PETSc-dependent groups against PETSc 3.26.1 (PyPI build in $venv) =="
@@ -55,11 +59,14 @@ if $newest; then
   cat "$build_log"
   echo "== the build's remainder after the first pass: $(( $(date +%s) - start )) s =="
   start=$(date +%s)
-  "$venv/bin/python" -m pytest -q "${workers[@]}" tests/unit tests/interface tests/parallel tests/solvers \
+  "$venv/bin/python" -m pytest -q "${workers[@]}" --durations=15 tests/unit tests/interface tests/parallel tests/solvers \
       tests/verification/test_contact.py tests/verification/test_friction.py tests/verification/test_scene3.py \
       --deselect "tests/verification/test_contact.py::test_sneddon_opening[penny_3d]" \
       --deselect "tests/interface/test_restart.py::test_kill_9_then_restart_gives_the_uninterrupted_run[scene2]" \
       --deselect "tests/interface/test_restart.py::test_kill_9_on_two_ranks_then_restart_gives_the_uninterrupted_run[scene2]" \
-      --deselect tests/interface/test_slurm.py "$@"
+      --deselect tests/interface/test_slurm.py \
+      --deselect tests/unit/test_predictor.py::test_the_predictor_cuts_newton_iterations_and_keeps_the_result \
+      --deselect tests/parallel/test_parallel.py::test_scene2_parallel_matches_serial \
+      --deselect tests/solvers/test_block.py::test_scene3_flow_and_heat_split_keeps_the_coupling "$@"
   echo "== PETSc 3.26.1 pass: $(( $(date +%s) - start )) s =="
 fi

@@ -54,7 +54,7 @@ def test_contact_glue_gives_the_fracture_storage(tmp_path):
     the pf block is singular: the same LU meets a zero pivot and the first
     step cannot be solved.  (With GAMG on the singular block the control
     failed too while FGMRES's Gram-Schmidt was not re-orthogonalised; with
-    ``refine_ifneeded``, stop 38, FGMRES gets past it: docs/solvers/index.md.)"""
+    ``refine_ifneeded`` FGMRES gets past it: docs/solvers/index.md.)"""
     common = ("-options_file", f"{ROOT}/options/scenes/fracture_inflation.opts", *BLOCK,
               "-thm_fe_degree", 1)
     _, s = run_petthm("fracture_inflation", tmp_path / "glue", *common)
@@ -82,12 +82,12 @@ def test_contact_schur_takes_the_face_loads_alone(tmp_path):
     iterations).  With the heat splits before the mechanics (Scene 3's
     order, ``Scene.block_recipe``) Tf keeps its own block, and ``all``
     completes as well.  The linear solves go to 1e-10, the recipe's
-    tolerance when this was measured: at the recipe's 1e-6 (stop 33) the
+    tolerance when this was measured: at a recipe tolerance of 1e-6 the
     control rejects 1 step of 4 with PETSc 3.26 (2 682 Krylov against
-    1 071 for ``faces``) and 3 of 7 with 3.18.  Since stop 34's step
-    control (a rejected step near a hit time grows back to the step before
-    it) the control's step collapses instead: 24 rejected, the run stops at
-    t = 0.9 s (measured with 3.18).  Since stop 38 (FGMRES re-orthogonalised)
+    1 071 for ``faces``) and 3 of 7 with 3.18.  With a step control in
+    which a rejected step near a hit time grows back to the step before
+    it, the control's step collapses instead: 24 rejected, the run stops at
+    t = 0.9 s (measured with 3.18).  With FGMRES re-orthogonalised
     the control's linear solves converge, its Newton iterates leave the
     fluid's range (mu(T) overflows) and, the Jacobian not being finite there,
     its steps are rejected: 70 rejected, the step collapses at t = 0.899 s
@@ -121,7 +121,7 @@ def test_p_multigrid_for_p2_displacement(tmp_path):
     """P2 u (3D Terzaghi, a 4 m wide column): the two-level p-multigrid of
     the elasticity needs clearly fewer Krylov iterations than GAMG on P2
     (measured: 8.7 against 14.0 per Newton here with the P1 level's GAMG
-    without aggressive coarsening, stop 43; 17 against 23 before it)."""
+    without aggressive coarsening; 17 against 23 with it)."""
     common = ("-options_file", f"{ROOT}/options/scenes/terzaghi.opts", *BLOCK, "-thm_terzaghi_dim", 3,
               "-thm_terzaghi_width", 4, "-thm_mesh_size", 1, "-thm_final_time", 5)
     mean = {}
@@ -305,8 +305,8 @@ def test_scene3_flow_and_heat_split_keeps_the_coupling(tmp_path):
     steps under the block recipe with the scene's changes
     (``Scene.block_recipe``): {pm, pf, Tf, Tm} as one split before the
     mechanics needs clearly fewer Krylov iterations than the five splits of
-    stop 34's order, each by its AMG cycle (the control, which drops the
-    coupling among the flow and heat fields; docs/solvers/index.md, stop 40).
+    the fields' order, each by its AMG cycle (the control, which drops the
+    coupling among the flow and heat fields; docs/solvers/index.md).
     Two ranks (block Jacobi with ILU(0) per rank in the one split) give the
     serial state."""
     common = ("-options_file", f"{ROOT}/options/scenes/inclined_penny_coarse.opts", "-thm_scene3_case", 2,
@@ -335,8 +335,7 @@ def test_coupled_mms_takes_the_flow_and_heat_split(tmp_path):
     the block path takes Scene 3's recipe (``CoupledMMS.block_recipe``):
     few Krylov iterations per Newton iteration.  The control, BLOCK_RECIPE's
     five splits each by its AMG cycle, needs many times more (at 60 k
-    unknowns every linear solve stopped at 500 iterations; docs/solvers/index.md,
-    stop 45)."""
+    unknowns every linear solve stopped at 500 iterations; docs/solvers/index.md)."""
     from petthm.solvers.recipes import BLOCK_RECIPE
     common = ("-thm_coupled_mms_dim", 3, "-thm_fe_degree", 1, "-thm_coupled_mms_supg", 1,
               "-thm_mesh_size", 0.12, "-thm_final_time", 0.5, "-thm_direct_max_unknowns", 0)
@@ -349,7 +348,7 @@ def test_coupled_mms_takes_the_flow_and_heat_split(tmp_path):
 def test_scene2_p2_block_path_gives_the_direct_solution(tmp_path):
     """Scene 2 with P2 u (coarse: 57 k unknowns) on the size rule's block
     path: its glued elasticity by BoomerAMG on the P2 level where PETSc has
-    hypre (``-vi_fieldsplit_mech_contact_pmg 0``, stop 40).  Seven steps to
+    hypre (``-vi_fieldsplit_mech_contact_pmg 0``).  Seven steps to
     1e4 s give the direct solve's injection pressure, production
     temperature and lam at the injector to 1e-8 (measured: 1.2e-10,
     1.5e-14, 3.7e-10; to 1e7 s: 3.5e-11, 1.8e-11, 1.4e-9).  Without hypre
@@ -382,7 +381,7 @@ def test_scene2_p2_recipe_holds_the_count_at_long_steps(tmp_path):
     aggressive coarsening, eight CG iterations; ``-vi_contact_schur off``)
     against the recipe before them (the negative control).  Measured: 221
     against 428 Krylov iterations in 28 Newton iterations each, the same
-    steps; ~200 s a run (docs/solvers/index.md, stop 42)."""
+    steps; ~200 s a run (docs/solvers/index.md)."""
     from petsc4py import PETSc
     if not PETSc.Sys.hasExternalPackage("hypre"):
         pytest.skip("PETSc without hypre: Scene 2's P2 recipe keeps the p-multigrid")

@@ -185,7 +185,7 @@ def test_layered_box_with_segment(tmp_path):
 
 def test_layered_slab_with_fracture(tmp_path):
     """lauwerier's 2D layered mesh: the cells tile the slab, all
-    counter-clockwise (both halves were clockwise before stop 26); the split
+    counter-clockwise; the split
     passes its checks with the fracture cutting the slab (no tip)."""
     import meshio
     path = M.layered_slab_with_fracture(str(tmp_path / "slab.msh"), (3.0,), 1.0, 0.1, 0.01, 1.5)

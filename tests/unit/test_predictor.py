@@ -55,9 +55,8 @@ def test_the_predictor_cuts_newton_iterations_and_keeps_the_result(tmp_path):
     and Krylov iterations than from the last state.  Both runs converge
     Newton to -snes_atol 1e-11 (the block path's default is 1e-9): at 1e-9 the
     two converged states differ inside that tolerance, by 3.0e-10 on one
-    machine and 1.2e-8 on another (stop 43's, with stop 42's code too: the
-    round-off differs; its source was not traced), which says nothing
-    about the predictor.
+    machine and 1.2e-8 on another (the same code; the round-off differs),
+    which says nothing about the predictor.
     Measured at 1e-11: PETSc 3.18 9.1e-13, Newton 220 against 252, Krylov
     2 181 against 2 878; PETSc 3.26 1.3e-12, Newton 220 against 252,
     Krylov 2 429 against 3 311."""

@@ -60,6 +60,7 @@ def test_coupled_mms_rates(tmp_path, degree, state, supg, sizes):
         assert sl >= degree - 0.2 and all(np.diff(err["lam"]["l2"]) < 0)
 
 
+@pytest.mark.slow             # 3D P2 on two meshes for two joints: ~95 s; make test-slow
 def test_the_closed_fractures_fields_converge_at_the_order_of_its_aperture(tmp_path):
     """3D P2, fracture closed: a = a0 - lam/Kn carries the contact traction's
     error (order h^2, a stress's) into the cubic law and the fracture's
