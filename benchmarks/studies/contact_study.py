@@ -91,7 +91,7 @@ def pairing_study(out):
                                os.path.join(ROOT, "options", "scenes", "penny_impermeable.opts"),
                                "-thm_scene2_fracture_size", size, "-thm_scene2_well_size", well,
                                "-thm_scene2_layer", 0, "-thm_fe_degree", degree, "-thm_final_time", 1e7,
-                               "-thm_contact_pairing", pairing)
+                               "-thm_contact_pairing", pairing, "-thm_heat_transport", "supg")
                 h = read_history(d)
                 rough = h["lam_roughness"].astype(float)
                 rows.append({"pairing": pairing, "degree": degree, "fracture_size_m": size,

@@ -80,7 +80,7 @@ def run_one(out, degree, level, scheme="beuler"):
         atol = (BDF2_ERROR_TOLERANCE if bdf2 else ERROR_TOLERANCE)[level]
         dt = ("-thm_dt_control", "error", "-ts_atol", atol, "-thm_dt_max", dtmax)
     s = run_petthm("lauwerier", d, "-thm_fe_degree", degree, "-thm_lauwerier_fracture_size", fs,
-                   "-thm_mesh_size", ms, *dt, *bdf2, *mesh)
+                   "-thm_mesh_size", ms, "-thm_heat_transport", "supg", *dt, *bdf2, *mesh)
     e = s["error"]
     row = {"scheme": scheme, "degree": degree, "level": level, "fracture_size": fs, "mesh_size": ms,
            "dt_growth": g if atol is None else f"atol {atol:g}",

@@ -55,7 +55,7 @@ CASES = {"k0": "0", "1d_1e-13": "0,1e-13"}
 def run(out: str, case: str, variant: str) -> None:
     run_petthm("rigid_fracture", os.path.join(out, "runs", case, variant), "-options_file",
                os.path.join(ROOT, "options", "scenes", "rigid_fracture.opts"),
-               "-thm_rock_permeability", CASES[case], *VARIANTS[variant])
+               "-thm_rock_permeability", CASES[case], "-thm_heat_transport", "supg", *VARIANTS[variant])
     print(f"{case} {variant}: done", flush=True)
 
 

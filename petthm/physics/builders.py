@@ -91,9 +91,17 @@ WATER_ENERGY_SCHEMES = ("upwind", "limited")
 
 
 def heat_scheme(p, degree: int, supg: bool = True) -> str:
-    """The discretisation of a run's heat advection (``-thm_heat_transport``;
-    galerkin where the scene asks for no stabilisation, ``supg=False``)."""
-    return getattr(p, "heat_transport", "supg") if supg else "galerkin"
+    """The discretisation of a run's heat advection of temperatures of
+    ``degree`` (``-thm_heat_transport``; ``auto``: the bound-preserving
+    limited scheme for P1, SUPG for P2, which has no bound-preserving scheme;
+    theory manual, discrete bounds); galerkin where the scene asks for no
+    stabilisation, ``supg=False``."""
+    if not supg:
+        return "galerkin"
+    scheme = getattr(p, "heat_transport", "auto")
+    if scheme == "auto":
+        return "limited" if degree == 1 else "supg"
+    return scheme
 
 
 class ModelBuilder:

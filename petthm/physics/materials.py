@@ -178,13 +178,14 @@ DECLARED = {
                                            "1-6 % where the wall layers are thin against the fracture "
                                            "cells; manual, verification: fracture flow and heat)",
                                            kind=DISCRETISATION),
-    "heat_transport": param("supg", "-", "discretisation of the heat advection of P1 temperatures: supg "
+    "heat_transport": param("auto", "-", "discretisation of the heat advection: auto (limited for P1 "
+                            "temperatures, supg for P2), supg "
                             "(streamline upwind Petrov-Galerkin), upwind (algebraic upwinding with the "
                             "capacity lumped: bound-preserving, first order where advection dominates), "
                             "limited (the upwinding flux-corrected: bound-preserving, Galerkin where the "
                             "temperature is smooth) or galerkin (no stabilisation); theory manual, "
                             "discrete bounds",
-                            choices=("supg", "upwind", "limited", "galerkin"), kind=DISCRETISATION),
+                            choices=("auto", "supg", "upwind", "limited", "galerkin"), kind=DISCRETISATION),
     "heat_limiter_settle": param(1e-4, "-", "with -thm_heat_transport limited: how far the limited fluxes "
                                  "may push a local extreme of a step's solved state further (their sum over "
                                  "the node's upwinding diffusion), as a fraction of the temperature range, "

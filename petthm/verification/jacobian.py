@@ -9,7 +9,9 @@ def _perturbed_state(problem, t: float, shift: float, rng, rate: float = 1.0):
     """X (the problem's current state plus a random perturbation, so that
     nonlinear terms are exercised away from special points), a random Xdot
     of standard deviation ``rate`` (scaled unknowns per second), and the
-    backward-Euler Jacobian J = dF/dX + shift dF/dXdot there."""
+    backward-Euler Jacobian J = dF/dX + shift dF/dXdot there.  The step's
+    start is X - Xdot / shift: terms evaluated there (the limited heat
+    transport's factors) see a state that moved by ``rate / shift`` scales."""
     X = problem.X.duplicate()
     problem.X.copy(X)
     X.getArray()[:] += 0.1 * rng.standard_normal(X.getLocalSize())
@@ -35,11 +37,12 @@ def _central_difference(problem, t: float, shift: float, X, Xdot, d, eps: float)
 
 
 def jacobian_fd_error(problem, t: float = 0.0, shift: float = 1.0, eps: float = 1e-6,
-                      seed: int = 0) -> float:
+                      seed: int = 0, rate: float = 1.0) -> float:
     """Relative error ||J d - (F(x+eps d) - F(x-eps d))/(2 eps)|| / ||J d||
-    at a perturbed state (``_perturbed_state``) along a random direction d."""
+    at a perturbed state (``_perturbed_state``, ``rate``: the size of its
+    random rates) along a random direction d."""
     rng = np.random.default_rng(seed + problem.dm.comm.rank)
-    X, Xdot, J = _perturbed_state(problem, t, shift, rng)
+    X, Xdot, J = _perturbed_state(problem, t, shift, rng, rate)
     d = X.duplicate()
     d.getArray()[:] = rng.standard_normal(d.getLocalSize())
     Jd = X.duplicate()

@@ -244,8 +244,8 @@ def test_a_scene_changes_the_block_recipe():
     from petthm.scenes import scene_class
     from petthm.solvers.recipes import BLOCK_RECIPE, solver_defaults_by_size
 
-    def recipe_of(scene, degree, snes_type="vinewtonrsls"):
-        run = SimpleNamespace(run=SimpleNamespace(fe_degree=degree))
+    def recipe_of(scene, degree, snes_type="vinewtonrsls", heat="auto"):
+        run = SimpleNamespace(run=SimpleNamespace(fe_degree=degree), p=SimpleNamespace(heat_transport=heat))
         return scene_class(scene).block_recipe(run, snes_type)
     assert recipe_of("partial_opening", 1) == {}           # vinewtonrsls: no graph threshold
     ssls = recipe_of("partial_opening", 1, "vinewtonssls")
@@ -254,14 +254,21 @@ def test_a_scene_changes_the_block_recipe():
     # Scene 3: the flow and heat fields as one split, before the mechanics
     assert order["vi_groups"] == "flow_heat=pm+pf+Tf+Tm,mech=u+lam+tau"
     assert order["vi_fieldsplit_flow_heat_ksp_type"] == "gmres"
+    # Scene 3's Newton and linear tolerances: tighter with the bound-preserving heat transport (its
+    # balances follow the residual at which Newton stops), the contact scenes' with SUPG
+    assert (order["snes_atol"], order["ksp_atol"]) == ("1e-10", "1e-12")
+    supg = recipe_of("inclined_penny", 2, heat="supg")
+    assert (supg["snes_atol"], supg["ksp_atol"]) == ("1e-9", "1e-10")
     big = solver_defaults_by_size({"pc_type": "lu"}, True, 10**6, 50000, order)
     assert big["vi_groups"] == order["vi_groups"] and big["pc_type"] == BLOCK_RECIPE["pc_type"]
     plain = solver_defaults_by_size({"pc_type": "lu"}, True, 10**6, 50000)
     assert plain["vi_groups"] == BLOCK_RECIPE["vi_groups"]
     assert solver_defaults_by_size({"pc_type": "lu"}, True, 10, 50000, order) == {"pc_type": "lu"}
-    # Scene 3's Newton tolerance: 1e-9 on the block path, the contact default (1e-12) on the direct one
+    # Scene 3's Newton tolerance: 1e-10 on the block path (1e-9 with SUPG), the contact default
+    # (1e-12) on the direct one
     direct = {"pc_type": "lu", "snes_atol": "1e-12"}
-    assert solver_defaults_by_size(direct, True, 10**6, 50000, order)["snes_atol"] == "1e-9"
+    assert solver_defaults_by_size(direct, True, 10**6, 50000, order)["snes_atol"] == "1e-10"
+    assert solver_defaults_by_size(direct, True, 10**6, 50000, supg)["snes_atol"] == "1e-9"
     assert solver_defaults_by_size(direct, True, 10, 50000, order)["snes_atol"] == "1e-12"
     # Scene 2: the same tolerance on the block path
 

@@ -19,25 +19,28 @@ from petthm.verification.jacobian import jacobian_fd_block_errors
 
 THM_ROCK = mt.group("Thermo-poro-elastic rock", mt.ELASTIC + mt.ROCK_HEAT + mt.FLUID_HEAT + mt.FLUID_FLOW + (
     "rock_biot_coefficient", "rock_porosity", "rock_permeability", "rock_thermal_expansion",
-    "initial_temperature", "thermomechanical_heating"), rock_porosity=0.2, rock_permeability=(1e-13,))
+    "initial_temperature", "thermomechanical_heating", *mt.HEAT_DISCRETISATION), rock_porosity=0.2,
+    rock_permeability=(1e-13,))
 
 
-def _parameters(heating: bool):
+def _parameters(heating: bool, scheme: str):
     opts = PETSc.Options()
     for k in list(opts.getAll()):
         opts.delValue(k)
     opts.setValue("thm_thermomechanical_heating", "1" if heating else "0")
+    opts.setValue("thm_heat_transport", scheme)
     return params.read_all([THM_ROCK], base=mt.Parameters)
 
 
-def biot_thm_problem(tmp_path, heating: bool) -> Problem:
+def biot_thm_problem(tmp_path, heating: bool, scheme: str = "auto") -> Problem:
     """u, pm, Tm on a square: elasticity with Biot and thermal strain, Darcy
-    flow with mu(T)-free mobility, advection-conduction of Tm."""
+    flow with mu(T)-free mobility, advection-conduction of Tm by ``scheme``
+    (-thm_heat_transport)."""
     path = meshing.box(str(tmp_path / "square.msh"), [10.0, 10.0], 2.5)
     dm = read_plex(path, PETSc.COMM_WORLD)
     label_boundaries(dm, {"bottom": lambda x: np.isclose(x[:, 1], 0.0)})
     mesh = Mesh(distribute(dm))
-    p = _parameters(heating)
+    p = _parameters(heating, scheme)
     b = ModelBuilder(p, 2)
     b.elasticity(2, biot=True, thermal=True)
     b.matrix_flow(1, permeability=p.permeability(2), storage=p.storage,
@@ -62,23 +65,28 @@ def _blocks(problem):
                     str(j.trial)) for j in problem.region(MATRIX).model.jacobians if j.test == "Tm")
 
 
-def test_heating_is_switched_on_by_the_option_alone(tmp_path):
+@pytest.mark.parametrize("scheme", ["supg", "limited"])
+def test_heating_is_switched_on_by_the_option_alone(tmp_path, scheme):
     """With -thm_thermomechanical_heating the builder adds the blocks of
     section 6 (Tm-u: strain heating, Tm-pm: pore fluid, Tm-Tm: T times both
-    rates) to those of heat transport; without it, none.  Heat transport's own
-    Tm-u block is SUPG's alpha d(div u)/dt (the T div b of its residual)."""
-    on, off = _blocks(biot_thm_problem(tmp_path / "on",
-                                       True)), _blocks(biot_thm_problem(tmp_path / "off", False))
+    rates) to those of heat transport; without it, none.  With SUPG heat
+    transport's own Tm-u block is SUPG's alpha d(div u)/dt (the T div b of
+    its residual)."""
+    on, off = (_blocks(biot_thm_problem(tmp_path / name, heating, scheme))
+               for name, heating in (("on", True), ("off", False)))
     print(on, off)
-    assert off[("Tm", "u")] == 1 and on[("Tm", "u")] == 2
+    assert on[("Tm", "u")] == off[("Tm", "u")] + 1
     assert on[("Tm", "pm")] == off[("Tm", "pm")] + 1 and on[("Tm", "Tm")] == off[("Tm", "Tm")] + 1
+    if scheme == "supg":
+        assert off[("Tm", "u")] == 1
 
 
+@pytest.mark.parametrize("scheme", ["supg", "limited"])
 @pytest.mark.parametrize("heating", [True, False])
-def test_biot_thm_blocks_match_finite_differences(tmp_path, heating):
+def test_biot_thm_blocks_match_finite_differences(tmp_path, heating, scheme):
     """Every coupling block of the composed u-pm-Tm model against finite
     differences; negative control: the heating residual without its blocks fails."""
-    problem = biot_thm_problem(tmp_path, heating)
+    problem = biot_thm_problem(tmp_path, heating, scheme)
     errs = jacobian_fd_block_errors(problem, t=10.0, shift=0.1, eps=(1e-6, 1e-4))
     print({k: f"{v:.1e}" for k, v in errs.items()})
     assert max(errs.values()) <= 1e-6, errs

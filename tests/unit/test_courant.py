@@ -37,11 +37,13 @@ def test_front_courant_counts_the_cells_a_ramp_moved(tmp_path, degree):
 
 
 def test_courant_limit_takes_more_and_more_accurate_steps(tmp_path):
-    """lauwerier P1 (fracture 2 m): the limit adds steps where the front
-    moves fast, and lowers the outlet error (measured: 184 -> 274 steps,
-    3.47 -> 1.62 K from 1e6 s on with 0.5 cells per step)."""
-    opts = ("-thm_fe_degree", 1, "-thm_lauwerier_fracture_size", 2, "-thm_mesh_size", 15,
-            "-thm_dt_max", 2e6, "-thm_dt_growth", 1.07)
+    """lauwerier P1 (fracture 2 m) with SUPG: the limit adds steps where the
+    front moves fast, and lowers the outlet error (measured: 184 -> 274 steps,
+    3.47 -> 1.62 K from 1e6 s on with 0.5 cells per step).  With the default
+    limited scheme this coarse rock's lumped capacity sets the error (0.30 of
+    the range either way; manual, theory: discrete bounds)."""
+    opts = ("-thm_fe_degree", 1, "-thm_heat_transport", "supg", "-thm_lauwerier_fracture_size", 2,
+            "-thm_mesh_size", 15, "-thm_dt_max", 2e6, "-thm_dt_growth", 1.07)
     _, free = run_petthm("lauwerier", tmp_path / "free", *opts)
     _, limited = run_petthm("lauwerier", tmp_path / "limited", *opts, "-thm_dt_courant", 0.5)
     assert limited["steps"] > 1.3 * free["steps"]

@@ -26,8 +26,8 @@ def _rates(tmp_path, sizes, *opts):
 
 
 @pytest.mark.parametrize("degree,state,supg,sizes", [
-    (1, "open", 1, (0.125, 0.0625, 0.03125, 0.015625)),       # the scenes' discretisation (SUPG on)
-    (1, "open", "limited", (0.125, 0.0625, 0.03125, 0.015625)),  # the flux-corrected upwinding
+    (1, "open", 1, (0.125, 0.0625, 0.03125, 0.015625)),       # SUPG (-thm_heat_transport supg)
+    (1, "open", "limited", (0.125, 0.0625, 0.03125, 0.015625)),  # the flux-corrected upwinding (P1's default)
     (2, "closed", 0, (0.25, 0.125, 0.0625, 0.03125)),         # P2, Galerkin heat, contact closed
     (2, "open", "wall", (0.25, 0.125, 0.0625)),               # P2, SUPG with the rock's wall conduction
 ])
@@ -37,9 +37,8 @@ def test_coupled_mms_rates(tmp_path, degree, state, supg, sizes):
     without it Tf and Tm stop at L2 slope 2.2 (docs/verification/coupled-mms.md, point 3).
     The limited scheme's stored energy counts the water's content (the
     manufactured sources too: its energy is cubic in t on the fracture)."""
-    wall = ("-thm_fracture_supg_wall_conduction", "true") if supg == "wall" else ()
-    if supg == "limited":
-        wall = ("-thm_heat_transport", "limited")
+    wall = {"wall": ("-thm_fracture_supg_wall_conduction", "true"), 1: ("-thm_heat_transport", "supg"),
+            "limited": ("-thm_heat_transport", "limited")}.get(supg, ())
     hs, err = _rates(tmp_path, sizes, "-thm_coupled_mms_dim", 2, "-thm_fe_degree", degree,
                      "-thm_coupled_mms_state", state, "-thm_coupled_mms_supg", int(bool(supg)), *wall)
     for f in FIELDS:
@@ -158,11 +157,13 @@ def test_coupled_mms_jacobian_blocks_match_finite_differences(tmp_path, degree):
 
 
 def test_coupled_mms_jacobian_check_can_fail(tmp_path, monkeypatch):
-    """Negative control: without the SUPG block of alpha d(div u)/dt the Tm-u block is wrong."""
+    """Negative control: without the SUPG block of alpha d(div u)/dt the Tm-u block is wrong
+    (SUPG's: P1 temperatures take the limited scheme by default)."""
     from petthm.physics.kernels import heat as hk
     from petthm.verification.jacobian import jacobian_fd_block_errors
     monkeypatch.setattr(hk, "heat_g3_Tu", lambda h, ctx: np.zeros((1, 1, 1, 2, 2, 2)))     # 2D
-    problem = build_problem(tmp_path, "coupled_mms", thm_fe_degree=1, thm_mesh_size=0.25)
+    problem = build_problem(tmp_path, "coupled_mms", thm_fe_degree=1, thm_mesh_size=0.25,
+                            thm_heat_transport="supg")
     err = jacobian_fd_block_errors(problem, t=0.5, shift=2.0, eps=1e-6)
     assert err[("Tm", "u")] > 1e-3
     assert err[("pm", "u")] <= 1e-6

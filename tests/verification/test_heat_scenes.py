@@ -11,19 +11,20 @@ MIN_SLOPE = {(1, "l2"): 1.8, (1, "h1"): 0.9, (2, "l2"): 2.8, (2, "h1"): 1.8}
 
 
 @pytest.mark.parametrize("dim", [2, 3])
-@pytest.mark.parametrize("degree", [1, 2])
-def test_heat_mms_convergence_rates(tmp_path, dim, degree):
+@pytest.mark.parametrize("degree,scheme", [(1, "auto"), (1, "supg"), (2, "auto")])
+def test_heat_mms_convergence_rates(tmp_path, dim, degree, scheme):
+    """The default heat transport (P1: the limited scheme; P2: SUPG) and P1 SUPG."""
     hs, l2, h1 = [], [], []
     for k, size in enumerate(MMS_SIZES[dim]):
         _, s = run_petthm("heat_mms", tmp_path / f"r{k}", "-thm_mms_dim", dim,
-                          "-thm_fe_degree", degree, "-thm_mesh_size", size)
+                          "-thm_fe_degree", degree, "-thm_mesh_size", size, "-thm_heat_transport", scheme)
         assert s["status"] == "completed"
         hs.append(s["h_max"])
         l2.append(s["error"]["Tm_l2"])
         h1.append(s["error"]["Tm_h1"])
     assert all(np.diff(l2) < 0) and all(np.diff(h1) < 0), (l2, h1)
     sl2, sh1 = fitted_slope(hs, l2), fitted_slope(hs, h1)
-    print(f"heat_mms {dim}D P{degree}: L2 slope {sl2:.3f}, H1 slope {sh1:.3f}, errors {l2} {h1}")
+    print(f"heat_mms {dim}D P{degree} {scheme}: L2 slope {sl2:.3f}, H1 slope {sh1:.3f}, errors {l2} {h1}")
     assert sl2 >= MIN_SLOPE[(degree, "l2")], sl2
     assert sh1 >= MIN_SLOPE[(degree, "h1")], sh1
     # theory: L2 ~ h^(p+1), H1 ~ h^p; fitted slopes within 0.2 of it
@@ -45,7 +46,7 @@ def test_heat_erfc_matches_half_space_solution(tmp_path):
 
 @pytest.mark.parametrize("degree", [1, 2])
 def test_supg_keeps_an_advected_front_bounded(tmp_path, degree):
-    _, s = run_petthm("heat_advection", tmp_path, "-thm_fe_degree", degree)
+    _, s = run_petthm("heat_advection", tmp_path, "-thm_fe_degree", degree, "-thm_heat_transport", "supg")
     assert s["cell_peclet_min"] >= 100
     over = s["bounds"]["Tm"]["violation_fraction"]
     print(f"heat_advection P{degree}: overshoot {over:.2e} at cell Peclet "

@@ -109,7 +109,8 @@ def test_upwinding_keeps_an_advected_front_in_bounds(tmp_path, scheme):
     solve, as for a linear problem)."""
     _, s = run_petthm("heat_advection", tmp_path / scheme, "-thm_fe_degree", 1,
                       "-thm_heat_transport", scheme)
-    _, supg = run_petthm("heat_advection", tmp_path / "supg", "-thm_fe_degree", 1)
+    _, supg = run_petthm("heat_advection", tmp_path / "supg", "-thm_fe_degree", 1,
+                         "-thm_heat_transport", "supg")
     print(f"excursion {scheme}", _excursion(s, "Tm"), "supg", _excursion(supg, "Tm"),
           "newton", s["snes_iterations"], "steps", s["steps"])
     assert s["cell_peclet_min"] >= 100

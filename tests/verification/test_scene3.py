@@ -69,7 +69,7 @@ def test_scene3_jacobian_check_can_fail(tmp_path, monkeypatch):
         return res, [j for j in jac if not (j.test == "pm" and j.trial == "u")]
     monkeypatch.setattr(pe, "elastic_terms", without_pm_u)
     problem = build_problem(tmp_path, "inclined_penny", thm_fe_degree=1, **COARSE)
-    err = jacobian_fd_block_errors(problem, t=1e5, shift=1e-5, eps=1e-6)
+    err = jacobian_fd_block_errors(problem, t=1e5, shift=1e-5, eps=1e-6, rate=1e-5)   # as above
     assert err[("pm", "u")] > 1e-2
     assert err[("pf", "lam")] <= 1e-6
 

@@ -18,25 +18,29 @@ COUPLINGS = {("u", "lam"), ("lam", "u"), ("u", "pf"), ("u", "Tm"), ("pf", "lam")
              ("Tf", "lam"), ("Tf", "u"), ("Tf", "pf")}
 
 
-@pytest.mark.parametrize("degree,exchange", [(1, "equilibrium"), (1, "nusselt"), (2, "equilibrium"),
-                                             (2, "equilibrium+wall")])
+@pytest.mark.parametrize("degree,exchange", [(1, "equilibrium"), (1, "nusselt"), (1, "equilibrium+supg"),
+                                             (2, "equilibrium"), (2, "equilibrium+wall")])
 def test_scene2_jacobian_blocks_match_finite_differences(tmp_path, degree, exchange):
     """Every block of the Scene 2 Jacobian against central differences, each
     block on its own: the aperture a(lam, g) in the storage, da/dt, the cubic
-    law and the fracture heat (capacity, conduction, advection, SUPG), mu(Tf),
-    beta_f, the face loads and the thermal strain; ``+wall``: with the rock's
-    wall conduction in the fracture's SUPG residual (its tau and b depend on
-    the deformable aperture)."""
-    exchange, _, wall = exchange.partition("+")
+    law and the fracture heat (capacity, conduction, advection by the default
+    limited scheme, or ``+supg``: SUPG), mu(Tf), beta_f, the face loads and
+    the thermal strain; ``+wall``: SUPG with the rock's wall conduction in the
+    fracture's SUPG residual (its tau and b depend on the deformable aperture)."""
+    exchange, _, variant = exchange.partition("+")
     problem = build_problem(tmp_path, "penny_impermeable", thm_fe_degree=degree,
                             thm_fracture_heat_exchange=exchange,
-                            thm_fracture_supg_wall_conduction=str(bool(wall)).lower(), **COARSE)
+                            thm_heat_transport="supg" if variant else "auto",
+                            thm_fracture_supg_wall_conduction=str(variant == "wall").lower(), **COARSE)
     # several steps, the best per block: the Tm-lam block of the wall exchange
     # is small in rows with large capacity and conduction terms (round-off
     # 4.7e-6 at 1e-6, 7e-8 at 1e-4), and with the lumped capacity the Tm-Tf
     # coupling is conduction alone (round-off 0.04 at 1e-6, falling as 1/step;
-    # those rows are linear, so a step of 1 is exact); a wrong block is wrong at every step
-    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=(1e-6, 1e-4, 1e-2, 1.0))
+    # those rows are linear, so a step of 1 is exact); a wrong block is wrong at every step.
+    # The rates move each unknown by about its scale over the step of 1/shift (the limited
+    # scheme's factors are evaluated at the step's start, X - Xdot / shift)
+    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=(1e-6, 1e-4, 1e-2, 1.0),
+                                   rate=1e-3)
     print(degree, exchange, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
     assert set(err) >= COUPLINGS
     if exchange == "nusselt":            # hw = Nu lambda_f / (2 a): the rock heat depends on lam and u+-
@@ -53,7 +57,7 @@ def test_scene2_jacobian_check_can_fail(tmp_path, monkeypatch):
     problem = build_problem(tmp_path, "penny_impermeable", thm_fe_degree=1,
                             thm_fracture_heat_exchange="equilibrium",
                             **COARSE)
-    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=1e-6)
+    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=1e-6, rate=1e-3)   # as above
     print({f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
     assert err[("Tf", "lam")] > 1e-2 and err[("Tf", "u")] > 1e-2
     assert err[("pf", "lam")] <= 1e-6
@@ -161,7 +165,7 @@ def test_thermomechanical_heating_jacobian(tmp_path, scene, opts):
     change make 1e-5 at a step of 1e-6 (it falls as 1/step: 1.8e-7 at 1e-4);
     a step of 1e-2 measures the blocks to 2e-9."""
     problem = build_problem(tmp_path, scene, thm_thermomechanical_heating=1, **opts)
-    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=1e-2)
+    err = jacobian_fd_block_errors(problem, t=1e4, shift=1e-3, eps=1e-2, rate=1e-3)
     print(scene, {f"{a}-{b}": float(f"{v:.2g}") for (a, b), v in err.items()})
     assert err[("Tm", "u")] <= 1e-6 and err[("Tm", "Tm")] <= 1e-6
 
