@@ -14,6 +14,9 @@ import pytest
 
 from conftest import MPI_ENV, ROOT, read_csv, read_json, read_text
 
+#: shell stand-ins for SLURM, no PETSc: the same on every PETSc version
+pytestmark = pytest.mark.first_pass_only
+
 SRUN = """#!/bin/bash
 "$@" &
 pid=$!

@@ -115,6 +115,7 @@ def test_scene2_block_path_parallel_matches_serial(tmp_path):
 
 
 @pytest.mark.parallel
+@pytest.mark.first_pass_only
 def test_scene2_parallel_matches_serial(tmp_path):
     """A coarse Scene 2 (layered mesh; u, lam, pf, Tf, Tm with contact, mu(T)
     and thermal strain) to 1e6 s: the well and contact histories and the final rock

@@ -307,6 +307,7 @@ def test_a_scene_changes_the_block_recipe():
     assert not any("_mg_coarse_" in k for r in (order, scene2, scene2_recipe(2)) for k in r)
 
 
+@pytest.mark.first_pass_only
 def test_scene3_flow_and_heat_split_keeps_the_coupling(tmp_path):
     """Scene 3 (coarse far field, a 12 m fracture mesh, P1 u) in 0.2-year
     steps under the block recipe with the scene's changes

@@ -4,6 +4,7 @@ step's first try only."""
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 from petsc4py import PETSc
 
 from petthm.solvers.predictor import LinearPredictor
@@ -49,6 +50,7 @@ def test_a_start_that_is_not_the_last_state_is_left_alone():
     pred.destroy()
 
 
+@pytest.mark.first_pass_only
 def test_the_predictor_cuts_newton_iterations_and_keeps_the_result(tmp_path):
     """Scene 2 coarse (layered mesh, the block path) to 1e9 s, SUPG: the same
     injection pressure and production temperature to 1e-10 with fewer Newton
