@@ -162,9 +162,14 @@ def resolution(out, cases) -> str:
     """The runs' mesh and discretisation, for the figures' captions."""
     d = run_dir(out, cases[0])
     s, p = read_summary(d), parameters(d)
-    scheme = p.get("thm_heat_transport", "supg")     # runs before "auto" recorded their default, supg
-    scheme = "limited" if scheme == "auto" else scheme  # auto: limited for Scene 3's P1 temperatures
-    return f"{s['cells']} cells, P{p.get('thm_fe_degree', 2)} u, P1 p and T, heat transport {scheme}"
+    from types import SimpleNamespace
+
+    from petthm.physics.builders import heat_scheme
+    from petthm.scenes.scene3 import TEMPERATURE_DEGREE
+    # runs written before "auto" existed recorded their default, supg
+    chosen = SimpleNamespace(heat_transport=p.get("thm_heat_transport", "supg"))
+    return (f"{s['cells']} cells, P{p.get('thm_fe_degree', 2)} u, P1 p and T, heat transport "
+            f"{heat_scheme(chosen, TEMPERATURE_DEGREE)}")
 
 
 def fig8_10(out, cases):

@@ -61,6 +61,8 @@ from petthm.solvers.recipes import flow_heat_first_recipe
 #: (T0 in degC, compressive in-situ stress in Pa) of the paper's cases 1, 2, 3
 CASES = {1: (80.0, 60e6), 2: (250.0, 60e6), 3: (250.0, 75e6)}
 YEAR = 365.25 * 86400.0
+#: the degree of Tf and Tm (P1 whatever -thm_fe_degree gives u)
+TEMPERATURE_DEGREE = 1
 #: an aperture this much above its initial value counts as raised (the affected area)
 RAISED = 0.10
 
@@ -257,7 +259,7 @@ class InclinedPenny(ClosedUnderStress, Scene):
         iterations per step; production temperature within 3e-7 K; theory
         manual, discretisation)."""
         recipe = {**contact_block_recipe(), **flow_heat_first_recipe(self.run.fe_degree)}
-        if heat_scheme(self.p, 1) in WATER_ENERGY_SCHEMES:
+        if heat_scheme(self.p, TEMPERATURE_DEGREE) in WATER_ENERGY_SCHEMES:
             recipe.update(snes_atol="1e-10", ksp_atol="1e-12")
         return recipe
 
@@ -363,8 +365,8 @@ class InclinedPenny(ClosedUnderStress, Scene):
         b.matrix_flow(1, permeability=K, storage=p.storage,
                       thermal_storage=p.rock_porosity * p.fluid_thermal_expansion, heat=True)
         b.leakoff()
-        b.fracture_heat(1, reference_aperture=a_ref, lumped=p.scene3_lumped_heat)
-        b.matrix_heat(1, lumped=p.scene3_lumped_heat)
+        b.fracture_heat(TEMPERATURE_DEGREE, reference_aperture=a_ref, lumped=p.scene3_lumped_heat)
+        b.matrix_heat(TEMPERATURE_DEGREE, lumped=p.scene3_lumped_heat)
         inj, prod = self.perforations()
         wells = MatrixWells(inj, prod, p.injection_rate, Ti, p.production_rate or None, p.production_pressure,
                             p.fluid_rho_c)
