@@ -31,11 +31,10 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from study_tables import MPI_ENV as ROOT_MPI_ENV  # noqa: E402
 from study_tables import ROOT, markdown, read_history, read_summary, write_csv, write_markdown  # noqa: E402
 
-MPI_ENV = dict(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1",
-               OMPI_MCA_mpi_yield_when_idle="1", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+MPI_ENV = dict(ROOT_MPI_ENV, OMPI_MCA_mpi_yield_when_idle="1", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
 
 COLUMNS = [("solver", "solver", ""), ("level", "level", ""), ("ranks", "ranks", ""),
            ("unknowns", "unknowns", ""),

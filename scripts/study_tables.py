@@ -14,15 +14,23 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def run_petthm(scene: str, out_dir: str, *opts) -> dict:
+#: what mpiexec needs to start ranks as root and more ranks than cores (Open MPI)
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1"}
+
+
+def run_petthm(scene: str, out_dir: str, *opts, ranks: int = 1) -> dict:
     """Run ``python -m petthm SCENE -thm_output_dir OUT_DIR -thm_quiet OPTS``
-    from the repository root on one core (one BLAS/OpenMP thread, so that
-    studies may run cases side by side) and return its summary.json.  A study
-    owns its run folders: a rerun replaces its earlier run there
-    (-thm_overwrite).  A failed run prints its output and stops the study."""
+    from the repository root (under ``mpiexec -n RANKS`` when ranks > 1) with
+    one BLAS/OpenMP thread per rank (so that studies may run cases side by
+    side) and return its summary.json.  A study owns its run folders: a rerun
+    replaces its earlier run there (-thm_overwrite).  A failed run prints its
+    output and stops the study."""
     cmd = [sys.executable, "-m", "petthm", scene, "-thm_output_dir", out_dir, "-thm_quiet", "-thm_overwrite",
            *map(str, opts)]
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    if ranks > 1:
+        cmd = ["mpiexec", "-n", str(ranks)] + cmd
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", **MPI_ENV)
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
     if p.returncode:
         print(p.stdout, p.stderr, file=sys.stderr)

@@ -117,6 +117,23 @@ def build_problem(tmp_path, scene, **opts):
     return run.setup(run.build_mesh())[1]
 
 
+def solved_problem(tmp_path, scene, **opts):
+    """Run a scene in this process with -thm_* options; returns (scene, its Problem at the end)."""
+    from petsc4py import PETSc
+
+    from petthm.run.driver import Run, make_scene
+    o = PETSc.Options()
+    for k in list(o.getAll()):
+        o.delValue(k)
+    o.setValue("thm_output_dir", str(tmp_path))
+    o.setValue("thm_quiet", "1")
+    for k, v in opts.items():
+        o.setValue(k, v)
+    run = Run(make_scene(scene))
+    assert run.execute()["status"] == "completed"
+    return run.scene, run.problem
+
+
 def fitted_slope(h, e):
     """Least-squares slope of log(e) against log(h)."""
     return float(np.polyfit(np.log(h), np.log(e), 1)[0])

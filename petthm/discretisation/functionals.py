@@ -23,6 +23,24 @@ class Functionals:
             acc += float(np.sum(self.W[cells] * np.broadcast_to(integrand(ctx), self.W[cells].shape)))
         return self.mesh.dm.comm.tompi4py().allreduce(acc)
 
+    def nodal_moments(self, xl, name: str, integrand: Callable,
+                      t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(int f psi_k, int psi_k) over this rank's cells for every local dof k
+        of ``name`` (local arrays, SI; 0 elsewhere), with f = ``integrand(ctx)``
+        (nc, nq) and psi the basis ``name`` is tested with here (the dual basis
+        in a dual region)."""
+        phi = self.tab(name).phi                                        # (nq, nb)
+        dofs = self.dofs(name)
+        num, den = np.zeros(xl.size), np.zeros(xl.size)
+        for cells in self.chunks():
+            ctx = CellContext(self, cells, xl, xl, t)
+            W = self.W[cells]
+            idx = dofs[cells].ravel()
+            f = np.broadcast_to(integrand(ctx), W.shape)
+            num += np.bincount(idx, weights=((W * f) @ phi).ravel(), minlength=xl.size)
+            den += np.bincount(idx, weights=(W @ phi).ravel(), minlength=xl.size)
+        return num, den
+
     def error_norms(self, xl, name: str, exact: Callable, exact_grad: Callable, t: float,
                     degree: int = 6) -> dict[str, float]:
         """Global L2 and H1-seminorm errors and norms of the exact field (SI)."""

@@ -203,6 +203,9 @@ class Model:
     aperture_law: ApertureLaw | None = None   # a deformable fracture's a(lam, g) (outputs, monitors)
     friction_law: FrictionLaw | None = None   # the Coulomb bound with friction (outputs, monitors)
     outputs: list[NodeOutputs] = field(default_factory=list)
+    #: the contact traction recovered from the rock's stress, f(ctx) (nc, nq) on the fracture
+    #: (kernels/contact.RecoveredTraction), projected onto lam's nodes for the outputs and monitors
+    recovered_traction: Callable | None = None
     #: fields whose range every step reports, with the interval they belong in
     ranges: dict[str, Range] = field(default_factory=dict)
     #: checks of the mesh a term is accurate on: ``check(mesh)`` returns a warning, or None

@@ -71,6 +71,7 @@ class Problem:
         self._jvals_constant = False              # it holds the constant terms' values (model.CellJacobian)
         self._residual_memo = None                # (t, shift, X, local residual) of the last ifunction
         self.probe_nodes: dict = {}               # probes.point_value's (rank, node) per (field, point)
+        self._averaging: dict[Region, Assembler] = {}     # ``nodal_average``'s, per region
         self._ev_res = PETSc.Log.Event("thm.residual")
         self._ev_jac = PETSc.Log.Event("thm.jacobian")
 
@@ -145,6 +146,39 @@ class Problem:
         idx = self.constraints.reaction_dofs(fields, boundaries)
         acc = float(np.sum(rl[idx] / self.inv_rscale[idx]))
         return self.dm.comm.tompi4py().allreduce(acc)
+
+    def nodal_average(self, name: str, integrand: Callable, X: PETSc.Vec | None = None,
+                      t: float = 0.0) -> np.ndarray:
+        """At each node of the field ``name``: the average over the cells
+        around it of f = ``integrand(ctx)`` (nc, nq, SI) evaluated at the node
+        in each cell, weighted by the nodal rule's weights (``fe.nodal_rule``:
+        positive, the cell's share of the node's area).  For an f that is a
+        polynomial in each cell with an O(h^p) error at every point, the
+        average has that error too.  SI values at the field's local nodes in
+        the order of ``field_values`` (collective; a node no rank's cell
+        reaches keeps the unknown's value)."""
+        region = Region(self.disc.field(name).region, nodal=True)
+        if region not in self._averaging:                 # no terms: not one of the residual's assemblers
+            self._averaging[region] = Assembler(self.disc, Model(self.model.fields), self.scales,
+                                                region=region)
+        xl, _ = self.local_arrays(X or self.X, t)
+        num, den = self._averaging[region].nodal_moments(xl, name, integrand, t)
+        loc, glob = self.dm.createLocalVec(), self.dm.createGlobalVec()
+        sums = []
+        for part in (num, den):
+            loc.getArray()[:] = part
+            glob.set(0.0)
+            self.dm.localToGlobal(loc, glob, addv=PETSc.InsertMode.ADD_VALUES)
+            self.dm.globalToLocal(glob, loc, addv=PETSc.InsertMode.INSERT_VALUES)
+            sums.append(loc.getArray().copy())
+        loc.destroy()
+        glob.destroy()
+        dofs = self.disc.field_local_dofs(name)[:, 0]
+        sc = self.scales[name]
+        out = xl[dofs] * sc.scale + sc.offset
+        reached = sums[1][dofs] != 0.0
+        out[reached] = sums[0][dofs][reached] / sums[1][dofs][reached]
+        return out
 
     def dirichlet_boundaries(self, fields) -> list[str]:
         return self.constraints.boundaries(fields)

@@ -206,6 +206,8 @@ class ModelBuilder:
         self.model.add(ct.fracture_mechanics_terms(self.mechanics))
         self.model.bounds["lam"] = (0.0, None)
         self.model.outputs.append(NodeOutputs(Domain.FRACTURE, "lam", contact_outputs))
+        if self.elastic is not None:
+            self.model.recovered_traction = ct.RecoveredTraction(self.mechanics, self.elastic)
         if self.p.fracture_friction > 0 or self.p.fracture_cohesion > 0:
             self.friction(degree, dual)
         return self.mechanics

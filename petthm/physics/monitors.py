@@ -260,9 +260,23 @@ def contact_node_checks(problem, closed_traction: float, X=None, t: float = 0.0)
 
 def contact_outputs(problem, t: float) -> dict[str, np.ndarray]:
     """The contact's fields a run writes with lam (``contact_node_fields``
-    without the per-rank area weights): ``Model.outputs`` of the contact."""
+    without the per-rank area weights, and ``lam_recovered``):
+    ``Model.outputs`` of the contact."""
     fields = contact_node_fields(problem, t=t)
-    return {k: v for k, v in fields.items() if k not in ("weight", "slipping_area")}
+    out = {k: v for k, v in fields.items() if k not in ("weight", "slipping_area")}
+    recovered = recovered_traction(problem, t=t)
+    if recovered is not None:
+        out["lam_recovered"] = recovered
+    return out
+
+
+def recovered_traction(problem, X=None, t: float = 0.0) -> np.ndarray | None:
+    """The contact traction recovered from the rock's stress
+    (``kernels.contact.RecoveredTraction``) at lam's local nodes (SI, in the
+    order of ``field_values("lam")``), averaged over the faces around each
+    node (``Problem.nodal_average``); None without elasticity (collective)."""
+    rt = problem.model.recovered_traction
+    return None if rt is None else problem.nodal_average("lam", rt, X, t)
 
 
 def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray]:

@@ -34,7 +34,7 @@ from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels import contact as ct
 from petthm.physics.kernels import poroelastic as pe
-from petthm.physics.monitors import fracture_vertices
+from petthm.physics.monitors import fracture_vertices, recovered_traction
 from petthm.scenes.base import (
     Monitor,
     Scene,
@@ -264,12 +264,14 @@ class _ContactPatchMonitor(Monitor):
         opening = probes.global_max(comm, np.abs(g), empty=0.0)
         aperture = probes.global_max(comm, np.abs(a - a_ex), empty=0.0)
         n = probes.global_sum(comm, len(a))
+        recovered = recovered_traction(problem, X, t)
         return {"lam_error": lam_error / ex, "opening_max": opening, "aperture_error": aperture / a_ex,
-                "aperture_mean": probes.global_sum(comm, float(a.sum())) / max(n, 1)}
+                "aperture_mean": probes.global_sum(comm, float(a.sum())) / max(n, 1),
+                "lam_recovered_error": probes.global_max(comm, np.abs(recovered - ex), empty=0.0) / ex}
 
     def __call__(self, problem, t, X=None):
         self.last = self.errors(problem, t, X)
-        for k in ("lam_error", "opening_max", "aperture_error"):
+        for k in ("lam_error", "opening_max", "aperture_error", "lam_recovered_error"):
             self.worst[k] = max(self.worst.get(k, 0.0), self.last[k])
         return self.last
 
@@ -287,7 +289,7 @@ class ContactPatch(Scene):
                            initial_pressure=20e6),
                   ContactPatchParams)
     time = TimeDefaults(final_time=1.0, dt_initial=0.25, mesh_size=2.5)
-    history_columns = ("lam_error", "opening_max", "aperture_error", "aperture_mean")
+    history_columns = ("lam_error", "opening_max", "aperture_error", "aperture_mean", "lam_recovered_error")
 
     def boundaries(self):
         p = self.p

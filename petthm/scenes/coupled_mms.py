@@ -17,6 +17,7 @@ with SUPG), plus the manufactured sources of ``petthm.verification.manufactured`
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import partial
 
@@ -32,6 +33,7 @@ from petthm.params import DISCRETISATION, MESH, PHYSICS, param
 from petthm.physics import materials as mt
 from petthm.physics.builders import WATER_ENERGY_SCHEMES, ModelBuilder, heat_scheme
 from petthm.physics.kernels import poroelastic as pe
+from petthm.physics.monitors import recovered_traction
 from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, face, on_sides
 from petthm.scenes.contact import contact_block_recipe, contact_solver_defaults
 from petthm.solvers.recipes import flow_heat_first_recipe
@@ -67,6 +69,11 @@ def coefficients(p, dim: int, water_energy: bool = False) -> Coefficients:
         water_energy=water_energy)
 
 
+def _error_entries(name: str, e: dict) -> dict:
+    return {f"{name}_l2": e["l2"], f"{name}_h1": e["h1"], f"{name}_l2_rel": e["l2_rel"],
+            f"{name}_h1_rel": e["h1_rel"]}
+
+
 class _ErrorNorms(Monitor):
     """L2 and H1-seminorm errors of every field at the end (relative to the
     exact field's norms; T relative to T - T0), and their worst over the run."""
@@ -88,9 +95,19 @@ class _ErrorNorms(Monitor):
                 e["l2_rel"] = e["l2"] / ref["l2_exact"]
             else:
                 e = problem.region(region).error_norms(xl, name, exact, self.m.gradient(name), t)
-            out.update({f"{name}_l2": e["l2"], f"{name}_h1": e["h1"], f"{name}_l2_rel": e["l2_rel"],
-                        f"{name}_h1_rel": e["h1_rel"]})
+            out.update(_error_entries(name, e))
+        if "lam" in self.fields:
+            out.update(_error_entries("lam_recovered", self.recovered_errors(problem, t)))
         return out
+
+    def recovered_errors(self, problem, t) -> dict:
+        """The errors of the traction recovered from the rock's stress
+        (``monitors.recovered_traction``) as a field on lam's nodes."""
+        recovered = recovered_traction(problem, t=t)
+        xl = problem.local_arrays(problem.X, t)[0].copy()
+        sc = problem.scales["lam"]
+        xl[problem.disc.field_local_dofs("lam")[:, 0]] = (recovered - sc.offset) / sc.scale
+        return problem.region(FRACTURE).error_norms(xl, "lam", self.m.value("lam"), self.m.gradient("lam"), t)
 
     def __call__(self, problem, t, X=None):
         e = self.errors(problem, t)
@@ -198,6 +215,8 @@ class CoupledMMS(Scene):
         b.matrix_heat(degree, source=sources["Tm"], supg=supg)
         model = b.build()
         model.add(source_terms(m, sources, frac))
+        model.recovered_traction = dataclasses.replace(model.recovered_traction,
+                                                       face_load=partial(manufactured_face_load, m))
         sigma = m.stress_function()
         model.facets += [pe.traction("u", part, partial(_outward_traction, sigma, part))
                          for part in self.sides()]
@@ -220,6 +239,15 @@ def _outward_traction(sigma, part: str, x, t):
     return sign * sigma(x, t)[..., :, axis]
 
 
+def manufactured_face_load(m: CoupledSolution, side: Side, ctx):
+    """h (nc, nq, d) of the half a fracture face's rock lies in: the face load
+    the manufactured solution puts on the trace of u on ``side`` (the half the
+    fracture normal points into is the + face)."""
+    up = (side.sign * ctx.normals[..., -1] > 0)[..., None]           # this face lies above Gamma
+    h = {s: m.face_load(s)(ctx.x, ctx.t) for s in HALVES}
+    return np.where(up, h[1], h[-1])
+
+
 def source_terms(m: CoupledSolution, sources: dict, frac: dict) -> tuple[list, list]:
     """The manufactured right-hand sides that the flow and heat builders do
     not take (-int w f): f_u on the cells, the face loads h of each half on
@@ -235,9 +263,8 @@ def source_terms(m: CoupledSolution, sources: dict, frac: dict) -> tuple[list, l
         return v if v.ndim == 3 else v[..., None]
 
     def face_load(side: Side, ctx):
-        up = (side.sign * ctx.normals[..., -1] > 0)[..., None]           # this face lies above Gamma
-        h = {s: m.face_load(s)(ctx.x, ctx.t) for s in HALVES}
-        return -np.where(up, h[1], h[-1])
+        return -manufactured_face_load(m, side, ctx)
+
     def step_increment(increment, ctx):
         return (increment(ctx.x, ctx.t) / ctx.shift if ctx.shift > 0 else np.zeros(ctx.shape))[..., None]
 

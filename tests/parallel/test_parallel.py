@@ -163,12 +163,12 @@ def test_scene3_parallel_matches_serial(tmp_path):
     field = max(np.abs(v2 - v1).max() / np.abs(v1).max(), np.abs(p2 - p1).max() / np.abs(p1).max())
     # the fracture surface's file (written by each rank for its own nodes, issue 15)
     fracture = 0.0
-    for name in ("pf", "Tf", "lam", "aperture"):
+    for name in ("pf", "Tf", "lam", "aperture", "lam_recovered"):
         (xf1, f1), (xf2, f2) = (final_field(tmp_path / f"n{n}", name, "fracture") for n in (1, 2))
         assert np.allclose(xf1, xf2, rtol=0, atol=1e-9)
         fracture = max(fracture, np.abs(f2 - f1).max() / np.abs(f1).max())
     print(f"inclined_penny: 2 ranks vs serial: histories {worst:.1e}, final Tm and pm {field:.1e}, "
-          f"fracture pf, Tf, lam, aperture {fracture:.1e}")
+          f"fracture pf, Tf, lam, aperture, lam_recovered {fracture:.1e}")
     assert worst <= 1e-8 and field <= 1e-8 and fracture <= 1e-8
 
 

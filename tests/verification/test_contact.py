@@ -4,7 +4,7 @@ Sneddon's crack openings, the contact patch test and partial opening."""
 import numpy as np
 import pytest
 
-from conftest import build_problem, read_csv
+from conftest import build_problem, read_csv, solved_problem
 from petthm.verification.jacobian import jacobian_fd_error
 
 SNEDDON_2D = ("-thm_sneddon_dim", 2, "-thm_sneddon_radius", 50, "-thm_sneddon_crack_size", 0.025)
@@ -66,7 +66,28 @@ def test_contact_patch_is_exact(tmp_path, petthm_run, dim, degree):
     print(dim, degree, e, s["aperture_mean"])
     assert s["status"] == "completed"
     assert e["lam_error"] <= 1e-6 and e["opening_max"] <= 1e-9 and e["aperture_error"] <= 1e-10
+    assert e["lam_recovered_error"] <= 1e-6
     assert abs(s["aperture_mean"] - 0.2e-3) <= 1e-10 * 0.2e-3
+
+
+def test_recovered_traction_is_exact_on_the_patch_and_needs_every_term(tmp_path):
+    """The traction recovered from the rock's stress
+    (kernels/contact.RecoveredTraction) is sigma - p at every node at the end
+    of the ramp (2D P1); negative controls: recovered with a rock twice as
+    stiff, or without the fluid's load, it is off by more than 10 %."""
+    import dataclasses
+    scene, problem = solved_problem(tmp_path, "contact_patch", thm_contact_dim=2)
+    t, rt = scene.final_time, problem.model.recovered_traction
+    exact = scene.exact_lam(t)
+
+    def error(recovery):
+        return np.abs(problem.nodal_average("lam", recovery, t=t) - exact).max() / exact
+    stiff = dataclasses.replace(rt, elastic=dataclasses.replace(rt.elastic,
+                                                                youngs_modulus=2 * rt.elastic.youngs_modulus))
+    dry = dataclasses.replace(rt, mech=dataclasses.replace(rt.mech, pressure=None))
+    print("recovered traction errors: exact", error(rt), "stiff", error(stiff), "dry", error(dry))
+    assert error(rt) <= 1e-12
+    assert error(stiff) > 0.1 and error(dry) > 0.1
 
 
 @pytest.mark.parametrize("sigma,kn,aperture",

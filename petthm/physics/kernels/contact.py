@@ -51,6 +51,7 @@ from petthm.discretisation.model import (
     Side,
     Trace,
 )
+from petthm.physics.kernels.poroelastic import Elastic, wall_stress
 
 
 @dataclass(frozen=True)
@@ -170,6 +171,42 @@ def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
             jac.append(CellJacobian(fm.lam, fm.trace(side), g0=partial(_gap_g0, side.sign),
                                     region=fm.pairing))
     return res, jac
+
+
+# -- the traction recovered from the rock's stress (theory manual, "Contact and friction") ----------
+@dataclass(frozen=True)
+class RecoveredTraction:
+    """The contact traction recovered from the rock's stress on the two faces.
+
+    Equilibrium of a face of the rock on side s (outward normal nu_s = -s n)
+    reads n . sigma_s n = -(pf + lam + sigma0_nn) + nu_s . h_s, where h_s is any
+    further load on that face (the manufactured solutions' face loads), so
+
+        lam*_s = -n . sigma_s n - (pf + sigma0_nn) + nu_s . h_s,
+
+    with sigma_s the stress in the rock cell next to the face (``poroelastic.wall_stress``):
+    lam* is the mean of the two faces' values.  sigma_s is the stress of the
+    discrete displacement, a polynomial of degree p - 1 in each cell whose
+    pointwise error is O(h^p); the multiplier lam, a weak nodal reaction,
+    carries a node-to-node scatter that decays more slowly on fine 3D meshes
+    (manual, verification: coupled MMS).  ``face_load(side, ctx)`` (nc, nq,
+    d): h_s, or None."""
+    mech: FractureMechanics
+    elastic: Elastic                         # the rock's
+    face_load: Callable | None = None
+
+    def on_side(self, side: Side, ctx):
+        """lam*_s (nc, nq) at the fracture's points."""
+        sigma = wall_stress(self.elastic, side, ctx)
+        n = np.broadcast_to(ctx.normals, sigma.shape[:-1])
+        lam = -np.einsum("cqa,cqab,cqb->cq", n, sigma, n) - fluid_load(self.mech, ctx)
+        if self.face_load is not None:
+            lam = lam - side.sign * np.einsum("cqa,cqa->cq", self.face_load(side, ctx), n)
+        return lam
+
+    def __call__(self, ctx):
+        """lam* (nc, nq): the mean of the two faces'."""
+        return 0.5 * (self.on_side(Side.MINUS, ctx) + self.on_side(Side.PLUS, ctx))
 
 
 # -- the aperture of a deformable fracture (theory manual, "Contact and friction") -------------------

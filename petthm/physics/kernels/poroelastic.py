@@ -23,7 +23,16 @@ from functools import partial
 
 import numpy as np
 
-from petthm.discretisation.model import MATRIX, CellJacobian, CellResidual, FacetTerm, Region
+from petthm.discretisation.model import (
+    MATRIX,
+    Adjacent,
+    CellJacobian,
+    CellResidual,
+    FacetTerm,
+    Region,
+    Side,
+    Trace,
+)
 
 
 @dataclass(frozen=True)
@@ -64,13 +73,26 @@ class Elastic:
 
 def stress(el: Elastic, ctx):
     """sigma (nc, nq, d, d), tension positive."""
-    G = ctx.grad(el.u)
+    return _stress_of(el, ctx, ctx.grad(el.u), el.p, el.T)
+
+
+def wall_stress(el: Elastic, side: Side, ctx):
+    """sigma (nc, nq, d, d) in the rock cell next to each fracture face on
+    ``side``, at the fracture's points (``ctx`` of a fracture region): the
+    gradient of u in that cell, pm and Tm on that face."""
+    return _stress_of(el, ctx, ctx.grad(Adjacent(el.u, side)), el.p and Trace(el.p, side),
+                      el.T and Trace(el.T, side))
+
+
+def _stress_of(el: Elastic, ctx, G, p, T):
+    """sigma from the displacement gradient G (nc, nq, d, d) and the pressure
+    and temperature references ``p``, ``T`` (None: not coupled)."""
     eps = 0.5 * (G + np.swapaxes(G, 2, 3))
     iso = el.lame * np.trace(eps, axis1=2, axis2=3)
-    if el.p is not None and el.biot:
-        iso = iso - el.biot * (ctx.value(el.p)[..., 0] - el.p_ref)
-    if el.T is not None and el.thermal_expansion:
-        iso = iso - el.bulk * el.thermal_expansion * (ctx.value(el.T)[..., 0] - el.T_ref)
+    if p is not None and el.biot:
+        iso = iso - el.biot * (ctx.value(p)[..., 0] - el.p_ref)
+    if T is not None and el.thermal_expansion:
+        iso = iso - el.bulk * el.thermal_expansion * (ctx.value(T)[..., 0] - el.T_ref)
     return 2 * el.shear * eps + iso[..., None, None] * np.eye(el.dim)
 
 
