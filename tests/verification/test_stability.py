@@ -11,7 +11,7 @@ import pytest
 from conftest import ROOT, read_text
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from verification_report import STABILITY, stability_row  # noqa: E402
+from verification_report import STABILITY, TRACTION_RECORDS, stability_row, traction_section  # noqa: E402
 
 HERE = "tests/verification/test_stability.py"
 
@@ -29,3 +29,23 @@ def test_every_stability_case_is_a_test():
         path, _, name = case.test.partition("::")
         text = read_text(os.path.join(ROOT, path))
         assert not name or f"def {name}(" in text, case.test
+
+
+def test_the_traction_section_judges_each_refinement(tmp_path):
+    """The report's contact-traction table (from benchmarks/records/): one
+    row per mesh, each refinement "met" where the recovered traction's slope
+    reaches the bound and "not met" where it does not."""
+    import csv
+    assert len([r for r in traction_section() if r.startswith("| 3D") or r.startswith("|  |")]) >= 6
+    degree, name, least = TRACTION_RECORDS[0]
+    with open(os.path.join(ROOT, "benchmarks", "records", name), newline="") as f:
+        data = list(csv.DictReader(f))
+    verdicts = {}
+    for slope in (least - 0.01, least + 0.01):
+        data[-1]["lam_recovered_slope"] = str(slope)
+        with open(tmp_path / name, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(data[0]))
+            w.writeheader()
+            w.writerows(data)
+        verdicts[slope] = [r for r in traction_section(str(tmp_path)) if r.startswith("|")][1 + len(data)]
+    assert verdicts[least - 0.01].endswith("| not met |") and verdicts[least + 0.01].endswith("| met |")
