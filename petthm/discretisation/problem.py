@@ -155,8 +155,10 @@ class Problem:
         positive, the cell's share of the node's area).  For an f that is a
         polynomial in each cell with an O(h^p) error at every point, the
         average has that error too.  SI values at the field's local nodes in
-        the order of ``field_values`` (collective; a node no rank's cell
-        reaches keeps the unknown's value)."""
+        the order of ``field_values`` (collective).  A constrained node (the
+        global vector that sums the ranks' shares has no entry for it: the
+        contact traction on a fracture front) and a node no rank's cell
+        reaches keep the field's own value."""
         region = Region(self.disc.field(name).region, nodal=True)
         if region not in self._averaging:                 # no terms: not one of the residual's assemblers
             self._averaging[region] = Assembler(self.disc, Model(self.model.fields), self.scales,
@@ -176,7 +178,7 @@ class Problem:
         dofs = self.disc.field_local_dofs(name)[:, 0]
         sc = self.scales[name]
         out = xl[dofs] * sc.scale + sc.offset
-        reached = sums[1][dofs] != 0.0
+        reached = (sums[1][dofs] != 0.0) & (self.disc.global_index[dofs] >= 0)
         out[reached] = sums[0][dofs][reached] / sums[1][dofs][reached]
         return out
 
