@@ -104,31 +104,26 @@ def ranks_of(mpiexec_pid) -> list[int]:
 
 def build_problem(tmp_path, scene, **opts):
     """Set up (not run) a scene in this process with -thm_* options; returns its Problem."""
-    from petsc4py import PETSc
-
     from petthm.run.driver import Run, make_scene
-    o = PETSc.Options()
-    for k in list(o.getAll()):
-        o.delValue(k)
-    o.setValue("thm_output_dir", str(tmp_path))
-    for k, v in opts.items():
-        o.setValue(k, v)
+    _only_options(thm_output_dir=str(tmp_path), **opts)
     run = Run(make_scene(scene))
     return run.setup(run.build_mesh())[1]
 
 
-def solved_problem(tmp_path, scene, **opts):
-    """Run a scene in this process with -thm_* options; returns (scene, its Problem at the end)."""
+def _only_options(**opts):
+    """Empty PETSc's options database, then set ``opts`` (-thm_* without the dash)."""
     from petsc4py import PETSc
-
-    from petthm.run.driver import Run, make_scene
     o = PETSc.Options()
     for k in list(o.getAll()):
         o.delValue(k)
-    o.setValue("thm_output_dir", str(tmp_path))
-    o.setValue("thm_quiet", "1")
     for k, v in opts.items():
         o.setValue(k, v)
+
+
+def solved_problem(tmp_path, scene, **opts):
+    """Run a scene in this process with -thm_* options; returns (scene, its Problem at the end)."""
+    from petthm.run.driver import Run, make_scene
+    _only_options(thm_output_dir=str(tmp_path), thm_quiet="1", **opts)
     run = Run(make_scene(scene))
     assert run.execute()["status"] == "completed"
     return run.scene, run.problem

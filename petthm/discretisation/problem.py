@@ -147,6 +147,22 @@ class Problem:
         acc = float(np.sum(rl[idx] / self.inv_rscale[idx]))
         return self.dm.comm.tompi4py().allreduce(acc)
 
+    def summed_over_ranks(self, parts) -> list[np.ndarray]:
+        """Each local array in ``parts`` with every unknown's entry summed over
+        the ranks that hold it (collective; a constrained dof keeps this
+        rank's entry)."""
+        loc, glob = self.dm.createLocalVec(), self.dm.createGlobalVec()
+        sums = []
+        for part in parts:
+            loc.getArray()[:] = part
+            glob.set(0.0)
+            self.dm.localToGlobal(loc, glob, addv=PETSc.InsertMode.ADD_VALUES)
+            self.dm.globalToLocal(glob, loc, addv=PETSc.InsertMode.INSERT_VALUES)
+            sums.append(loc.getArray().copy())
+        loc.destroy()
+        glob.destroy()
+        return sums
+
     def nodal_average(self, name: str, integrand: Callable, X: PETSc.Vec | None = None,
                       t: float = 0.0) -> np.ndarray:
         """At each node of the field ``name``: the average over the cells
@@ -164,17 +180,7 @@ class Problem:
             self._averaging[region] = Assembler(self.disc, Model(self.model.fields), self.scales,
                                                 region=region)
         xl, _ = self.local_arrays(X or self.X, t)
-        num, den = self._averaging[region].nodal_moments(xl, name, integrand, t)
-        loc, glob = self.dm.createLocalVec(), self.dm.createGlobalVec()
-        sums = []
-        for part in (num, den):
-            loc.getArray()[:] = part
-            glob.set(0.0)
-            self.dm.localToGlobal(loc, glob, addv=PETSc.InsertMode.ADD_VALUES)
-            self.dm.globalToLocal(glob, loc, addv=PETSc.InsertMode.INSERT_VALUES)
-            sums.append(loc.getArray().copy())
-        loc.destroy()
-        glob.destroy()
+        sums = self.summed_over_ranks(self._averaging[region].nodal_moments(xl, name, integrand, t))
         dofs = self.disc.field_local_dofs(name)[:, 0]
         sc = self.scales[name]
         out = xl[dofs] * sc.scale + sc.offset

@@ -213,21 +213,14 @@ def _nodal_average(problem, dofs: np.ndarray, values: np.ndarray, covered: np.nd
     the ranks that know it, on every rank that holds the node (a rank can
     hold a node of another rank's cells only).  Constrained dofs keep their
     local value."""
-    from petsc4py import PETSc
-    dm = problem.dm
-    loc, glob = dm.createLocalVec(), dm.createGlobalVec()
     out = values.copy()
     cols = [covered.astype(float)] + [values[:, k] * covered for k in range(values.shape[1])]
-    shared = []
+    parts = []
     for col in cols:
-        loc.set(0.0)
-        loc.getArray()[dofs] = col
-        glob.set(0.0)
-        dm.localToGlobal(loc, glob, addv=PETSc.InsertMode.ADD_VALUES)
-        dm.globalToLocal(glob, loc, addv=PETSc.InsertMode.INSERT_VALUES)
-        shared.append(loc.getArray()[dofs].copy())
-    loc.destroy()
-    glob.destroy()
+        part = np.zeros(problem.disc.nlocal)
+        part[dofs] = col
+        parts.append(part)
+    shared = [s[dofs] for s in problem.summed_over_ranks(parts)]
     free = problem.disc.global_index[dofs] >= 0
     count = shared[0]
     ok = free & (count > 0)
