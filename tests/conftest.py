@@ -9,9 +9,12 @@ import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: Open MPI on one node: run as root, more ranks than cores, and the ob1 message layer (what Open
-#: MPI falls back to here after probing UCX for a network: the probe costs every rank ~0.2 s)
+#: MPI falls back to here after probing UCX for a network: the probe costs every rank ~0.2 s).
+#: Waiting ranks poll without yielding: beside another worker's serial run on two cores a yielding
+#: rank loses the core for whole time slices (a 2-rank rigid_fracture run of 6.5 s alone: 13 s
+#: beside a serial run polling, 147 s yielding)
 MPI_ENV = dict(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="0",
                OMPI_MCA_pml="ob1")
 
 
