@@ -23,21 +23,24 @@ class Functionals:
             acc += float(np.sum(self.W[cells] * np.broadcast_to(integrand(ctx), self.W[cells].shape)))
         return self.mesh.dm.comm.tompi4py().allreduce(acc)
 
-    def nodal_moments(self, xl, name: str, integrand: Callable,
-                      t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    def nodal_moments(self, xl, name: str, integrand: Callable, t: float = 0.0,
+                      width: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """(int f psi_k, int psi_k) over this rank's cells for every local dof k
-        of ``name`` (local arrays, SI; 0 elsewhere), with f = ``integrand(ctx)``
-        (nc, nq) and psi the basis ``name`` is tested with here (the dual basis
-        in a dual region)."""
+        of ``name`` (local arrays, SI; 0 elsewhere; the first (xl.size,
+        width); a vector field's at the dofs of its first component),
+        with f = ``integrand(ctx)`` (nc, nq) or (nc, nq, width) and psi the
+        basis ``name`` is tested with here (the dual basis in a dual region)."""
         phi = self.tab(name).phi                                        # (nq, nb)
-        dofs = self.dofs(name)
-        num, den = np.zeros(xl.size), np.zeros(xl.size)
+        dofs = self.dofs(name)[:, ::self.disc.field(name).ncomp]       # a vector's: its first component's
+        num, den = np.zeros((xl.size, width)), np.zeros(xl.size)
         for cells in self.chunks():
             ctx = CellContext(self, cells, xl, xl, t)
             W = self.W[cells]
             idx = dofs[cells].ravel()
-            f = np.broadcast_to(integrand(ctx), W.shape)
-            num += np.bincount(idx, weights=((W * f) @ phi).ravel(), minlength=xl.size)
+            f = np.broadcast_to(integrand(ctx), W.shape + ((width,) if width > 1 else ()))
+            moments = np.einsum("cq,cqm,qk->ckm", W, f.reshape(W.shape + (width,)), phi)
+            for m in range(width):
+                num[:, m] += np.bincount(idx, weights=moments[..., m].ravel(), minlength=xl.size)
             den += np.bincount(idx, weights=(W @ phi).ravel(), minlength=xl.size)
         return num, den
 

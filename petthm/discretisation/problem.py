@@ -164,28 +164,58 @@ class Problem:
         return sums
 
     def nodal_average(self, name: str, integrand: Callable, X: PETSc.Vec | None = None,
-                      t: float = 0.0) -> np.ndarray:
+                      t: float = 0.0, width: int = 1) -> np.ndarray:
         """At each node of the field ``name``: the average over the cells
-        around it of f = ``integrand(ctx)`` (nc, nq, SI) evaluated at the node
-        in each cell, weighted by the nodal rule's weights (``fe.nodal_rule``:
-        positive, the cell's share of the node's area).  For an f that is a
-        polynomial in each cell with an O(h^p) error at every point, the
-        average has that error too.  SI values at the field's local nodes in
-        the order of ``field_values`` (collective).  A constrained node (the
-        global vector that sums the ranks' shares has no entry for it: the
-        contact traction on a fracture front) and a node no rank's cell
-        reaches keep the field's own value."""
+        around it of f = ``integrand(ctx)`` ((nc, nq) SI, or (nc, nq, width))
+        evaluated at the node in each cell, weighted by the nodal rule's
+        weights (``fe.nodal_rule``: positive, the cell's share of the node's
+        area or volume).  For an f that is a polynomial in each cell with an
+        O(h^p) error at every point, the average has that error too.  SI
+        values (n,) or (n, width) at the field's local nodes in the order of
+        ``field_values``, the same on every rank that holds the node
+        (collective).  A node no cell of the field's region reaches keeps the
+        field's own value (the first component's)."""
         region = Region(self.disc.field(name).region, nodal=True)
         if region not in self._averaging:                 # no terms: not one of the residual's assemblers
             self._averaging[region] = Assembler(self.disc, Model(self.model.fields), self.scales,
                                                 region=region)
         xl, _ = self.local_arrays(X or self.X, t)
-        sums = self.summed_over_ranks(self._averaging[region].nodal_moments(xl, name, integrand, t))
+        num, den = self._averaging[region].nodal_moments(xl, name, integrand, t, width)
         dofs = self.disc.field_local_dofs(name)[:, 0]
+        points = self.disc.node_points(name) - self.disc.pstart
+        parts, npoints = [], self.dm.getChart()[1] - self.disc.pstart
+        for col in [den] + [num[:, m] for m in range(width)]:
+            part = np.zeros(npoints)
+            part[points] = col[dofs]
+            parts.append(part)
+        sums = [s[points] for s in self.summed_at_points(parts)]
         sc = self.scales[name]
-        out = xl[dofs] * sc.scale + sc.offset
-        reached = (sums[1][dofs] != 0.0) & (self.disc.global_index[dofs] >= 0)
-        out[reached] = sums[0][dofs][reached] / sums[1][dofs][reached]
+        out = np.repeat((xl[dofs] * sc.scale + sc.offset)[:, None], width, axis=1)
+        reached = sums[0] != 0.0
+        for m in range(width):
+            out[reached, m] = sums[1 + m][reached] / sums[0][reached]
+        return out if width > 1 else out[:, 0]
+
+    def summed_at_points(self, parts) -> list[np.ndarray]:
+        """Each array in ``parts`` (one entry per mesh point of this rank's
+        chart) with every point's entry summed over the ranks that hold the
+        point, on each of them (collective; the mesh's point star forest:
+        reduced onto the owner, sent back to the ghosts).  Unlike
+        ``summed_over_ranks`` it holds for every point, a constrained one too."""
+        if self.dm.comm.size == 1:
+            return [np.array(p, dtype=float) for p in parts]
+        from mpi4py import MPI
+        sf = self.dm.getPointSF()
+        out = []
+        for part in parts:
+            leaf = np.ascontiguousarray(part, dtype=float)
+            root = leaf.copy()
+            sf.reduceBegin(MPI.DOUBLE, leaf, root, MPI.SUM)
+            sf.reduceEnd(MPI.DOUBLE, leaf, root, MPI.SUM)
+            total = root.copy()
+            sf.bcastBegin(MPI.DOUBLE, root, total, MPI.REPLACE)
+            sf.bcastEnd(MPI.DOUBLE, root, total, MPI.REPLACE)
+            out.append(total)
         return out
 
     def dirichlet_boundaries(self, fields) -> list[str]:

@@ -7,6 +7,7 @@ attributes, so that a scene's ``Monitor`` composes them.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -263,13 +264,41 @@ def contact_outputs(problem, t: float) -> dict[str, np.ndarray]:
     return out
 
 
-def recovered_traction(problem, X=None, t: float = 0.0) -> np.ndarray | None:
+def recovered_traction(problem, X=None, t: float = 0.0, recovery=None) -> np.ndarray | None:
     """The contact traction recovered from the rock's stress
-    (``kernels.contact.RecoveredTraction``) at lam's local nodes (SI, in the
-    order of ``field_values("lam")``), averaged over the faces around each
+    (``kernels.contact.RecoveredTraction``, the model's or ``recovery``) at
+    lam's local nodes (SI, in the order of ``field_values("lam")``), with the
+    rock's displacement gradient averaged over the cells around each node on
+    each side (``wall_gradients``) and the faces' values averaged around each
     node (``Problem.nodal_average``); None without elasticity (collective)."""
-    rt = problem.model.recovered_traction
-    return None if rt is None else problem.nodal_average("lam", rt, X, t)
+    rt = problem.model.recovered_traction if recovery is None else recovery
+    if rt is None:
+        return None
+    gradients = wall_gradients(problem, rt.elastic.u, X, t)
+    return problem.nodal_average("lam", dataclasses.replace(rt, wall_gradient=gradients), X, t)
+
+
+def wall_gradients(problem, u: str, X=None, t: float = 0.0) -> dict:
+    """The gradient of the displacement ``u`` at each node of the rock,
+    averaged over the cells around it with each cell's share of the node's
+    volume (``Problem.nodal_average``: the cells of one side of the fracture
+    only, as the faces' nodes are split), at the nodes of u's trace on each
+    fracture face on each side: {side: (nc, nb, d, d)} (collective).  On a regular family
+    of meshes the average of a P1 gradient is a P1 field of O(h) error or
+    better, free of the scatter of one cell's gradient."""
+    from petthm.discretisation.model import Trace
+    disc = problem.disc
+    d = disc.regions[Domain.FRACTURE].dim
+    def gradient(ctx):                 # (nc, 1, d, d) where it is constant in each cell
+        return np.broadcast_to(ctx.grad(u), ctx.shape + (d, d)).reshape(ctx.shape + (d * d,))
+    G = problem.nodal_average(u, gradient, X, t, width=d * d)
+    slot = np.full(disc.nlocal, -1)
+    slot[disc.field_local_dofs(u)[:, 0]] = np.arange(len(G))
+    out = {}
+    for side in ct.SIDES:
+        first = disc.region_dofs(Domain.FRACTURE, Trace(u, side))[:, ::d]         # (nc, nb): u's trace nodes
+        out[side] = G[slot[first]].reshape(first.shape + (d, d))
+    return out
 
 
 def contact_node_fields(problem, X=None, t: float = 0.0) -> dict[str, np.ndarray]:

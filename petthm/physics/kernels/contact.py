@@ -176,7 +176,8 @@ def fracture_mechanics_terms(fm: FractureMechanics) -> tuple[list, list]:
 # -- the traction recovered from the rock's stress (theory manual, "Contact and friction") ----------
 @dataclass(frozen=True)
 class RecoveredTraction:
-    """The contact traction recovered from the rock's stress on the two faces.
+    """The contact traction recovered from the rock's stress on the two faces
+    (theory manual, "The recovered traction").
 
     Equilibrium of a face of the rock on side s (outward normal nu_s = -s n)
     reads n . sigma_s n = -(pf + lam + sigma0_nn) + nu_s . h_s, where h_s is any
@@ -184,20 +185,27 @@ class RecoveredTraction:
 
         lam*_s = -n . sigma_s n - (pf + sigma0_nn) + nu_s . h_s,
 
-    with sigma_s the stress in the rock cell next to the face (``poroelastic.wall_stress``):
-    lam* is the mean of the two faces' values.  sigma_s is the stress of the
-    discrete displacement, a polynomial of degree p - 1 in each cell whose
-    pointwise error is O(h^p); the multiplier lam, a weak nodal reaction,
-    carries a node-to-node scatter that decays more slowly on fine 3D meshes
-    (manual, verification: coupled MMS).  ``face_load(side, ctx)`` (nc, nq,
-    d): h_s, or None."""
+    and lam* is the mean of the two faces' values.  sigma_s
+    (``poroelastic.wall_stress``) takes pm and Tm on the face and the
+    displacement gradient ``wall_gradient[side]`` (per fracture face and
+    node of u's trace, (nc, nb, d, d): the rock's gradient averaged over the
+    cells around the node on that side, ``monitors.wall_gradients``; for
+    the nodal rule, whose points are those nodes: u has the highest
+    degree of the fields), or without it the
+    gradient in the one rock cell next to each face.  ``face_load(side,
+    ctx)`` (nc, nq, d): h_s, or None."""
     mech: FractureMechanics
     elastic: Elastic                         # the rock's
     face_load: Callable | None = None
+    wall_gradient: dict | None = None
 
     def on_side(self, side: Side, ctx):
         """lam*_s (nc, nq) at the fracture's points."""
-        sigma = wall_stress(self.elastic, side, ctx)
+        G = None if self.wall_gradient is None else ctx.cell_values(self.wall_gradient[side])
+        if G is not None and G.shape[1] != ctx.shape[1]:
+            raise ValueError(f"wall_gradient has {G.shape[1]} nodes per face and the rule {ctx.shape[1]} "
+                             "points: it is evaluated at the nodes of u's trace (the nodal rule)")
+        sigma = wall_stress(self.elastic, side, ctx, G)
         n = np.broadcast_to(ctx.normals, sigma.shape[:-1])
         lam = -np.einsum("cqa,cqab,cqb->cq", n, sigma, n) - fluid_load(self.mech, ctx)
         if self.face_load is not None:

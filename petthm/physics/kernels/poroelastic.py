@@ -76,12 +76,13 @@ def stress(el: Elastic, ctx):
     return _stress_of(el, ctx, ctx.grad(el.u), el.p, el.T)
 
 
-def wall_stress(el: Elastic, side: Side, ctx):
-    """sigma (nc, nq, d, d) in the rock cell next to each fracture face on
-    ``side``, at the fracture's points (``ctx`` of a fracture region): the
-    gradient of u in that cell, pm and Tm on that face."""
-    return _stress_of(el, ctx, ctx.grad(Adjacent(el.u, side)), el.p and Trace(el.p, side),
-                      el.T and Trace(el.T, side))
+def wall_stress(el: Elastic, side: Side, ctx, gradient=None):
+    """sigma (nc, nq, d, d) on the rock's face on ``side`` of the fracture,
+    at the fracture's points (``ctx`` of a fracture region): from the
+    displacement gradient ``gradient`` (nc, nq, d, d; default: that of u in
+    the rock cell next to each face) and pm and Tm on that face."""
+    G = ctx.grad(Adjacent(el.u, side)) if gradient is None else gradient
+    return _stress_of(el, ctx, G, el.p and Trace(el.p, side), el.T and Trace(el.T, side))
 
 
 def _stress_of(el: Elastic, ctx, G, p, T):
