@@ -1,0 +1,118 @@
+"""The named physical groups of a gmsh mesh (``../shared/docs/reservoir.md``
+section 1): a deck refers to the mesh's rock units, fractures, boundaries and
+wells by the names of its physical groups.
+
+The names come from the file's ``$PhysicalNames`` section, which both of
+gmsh's formats (2.2 and 4.1, ASCII or binary) write as text before the
+nodes: rank 0 reads that section alone and broadcasts it, so no rank reads
+the mesh for its names.  ``check_names`` applies the contract's rules: a
+name matches ``[A-Za-z][A-Za-z0-9]*``; two names that differ only in case,
+a name of DMPlex's own labels, and a name that is the first word of a
+global option under the same prefix (a fracture called ``normal`` would
+make ``-thm_fracture_normal_stiffness`` ambiguous) are input errors.
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+from petthm.errors import InputError
+
+#: what a group's name may be (PETSc cuts option values at spaces; an underscore would make the
+#: option suffixes ambiguous)
+NAME = re.compile(r"[A-Za-z][A-Za-z0-9]*\Z")
+#: the labels DMPlex makes itself (lower case: names match without regard to case)
+DMPLEX_LABELS = ("depth", "celltype", "cell sets", "face sets", "vertex sets")
+#: the option prefix of each kind of group
+PREFIXES = {"region": "-thm_region_", "fracture": "-thm_fracture_", "bc": "-thm_bc_", "well": "-thm_well_"}
+
+
+@dataclass(frozen=True)
+class Group:
+    """One physical group: its dimension, gmsh tag and name."""
+    dim: int
+    tag: int
+    name: str
+
+
+def read_physical_names(path: str) -> list[Group]:
+    """The physical groups that have names in a gmsh file (its
+    ``$PhysicalNames`` section; an empty list without one)."""
+    groups: list[Group] = []
+    try:
+        with open(path, "rb") as f:
+            for raw in f:
+                line = raw.strip()
+                if line == b"$PhysicalNames":
+                    return _names_section(f, path)
+                if line in (b"$Nodes", b"$Entities", b"$Elements"):
+                    break
+    except OSError as e:
+        raise InputError(f"option -thm_mesh_file: cannot read {path}: {e.strerror}") from None
+    return groups
+
+
+def _names_section(f, path: str) -> list[Group]:
+    try:
+        count = int(f.readline())
+        groups = []
+        for _ in range(count):
+            dim, tag, name = f.readline().decode().strip().split(maxsplit=2)
+            groups.append(Group(int(dim), int(tag), name.strip().strip('"')))
+    except (ValueError, UnicodeDecodeError):
+        raise InputError(f"option -thm_mesh_file: {path}: its $PhysicalNames section is not "
+                         "gmsh's (a count, then 'dim tag \"name\"' per line)") from None
+    return groups
+
+
+def named_groups(path: str, comm) -> list[Group]:
+    """``read_physical_names`` on rank 0, broadcast to every rank of
+    ``comm`` (an mpi4py communicator); an input error on one is raised on all."""
+    result = None
+    if comm.rank == 0:
+        try:
+            result = read_physical_names(path)
+        except InputError as e:
+            result = e
+    result = comm.bcast(result, root=0)
+    if isinstance(result, InputError):
+        raise result
+    return result
+
+
+def reserved_words(options: Iterable[str], kind: str) -> set[str]:
+    """The first words after the prefix of ``kind`` (``PREFIXES``) of the
+    global options ``options`` (with or without the leading dash; lower
+    case): the names a group of that kind cannot take."""
+    prefix = PREFIXES[kind][1:]
+    names = (o.lstrip("-") for o in options)
+    return {o[len(prefix):].split("_")[0].lower() for o in names if o.startswith(prefix)}
+
+
+def check_names(groups: Iterable[Group], reserved: Mapping[str, set[str]] | None = None,
+                kinds: Mapping[str, str] | None = None) -> None:
+    """Input errors for the names of ``groups`` that break the contract:
+    the pattern ``NAME``, names equal but for case, DMPlex's labels, and a
+    name in ``reserved[kind]`` for its group's kind (``kinds``: name ->
+    region, fracture, bc or well)."""
+    seen: dict[str, Group] = {}
+    for g in groups:
+        where = f"physical group '{g.name}' (dimension {g.dim}, tag {g.tag})"
+        if not NAME.match(g.name):
+            raise InputError(f"{where}: a name is a letter followed by letters and digits "
+                             "([A-Za-z][A-Za-z0-9]*), without spaces or underscores")
+        key = g.name.lower()
+        if key in DMPLEX_LABELS:
+            raise InputError(f"{where}: the name of a label DMPlex makes itself "
+                             f"({', '.join(DMPLEX_LABELS)}); rename the group")
+        other = seen.get(key)
+        if other is not None:
+            raise InputError(f"{where} and '{other.name}' (dimension {other.dim}, tag {other.tag}) "
+                             + ("share the name" if other.name == g.name else "differ only in case")
+                             + "; a name (matched without regard to case) names one group")
+        seen[key] = g
+        kind = (kinds or {}).get(g.name)
+        if kind and key in (reserved or {}).get(kind, set()):
+            raise InputError(f"{where}: '{g.name}' is the first word of a global {PREFIXES[kind]}* option "
+                             f"({PREFIXES[kind]}{key}_...); rename the group")
