@@ -10,6 +10,8 @@ name matches ``[A-Za-z][A-Za-z0-9]*``; two names that differ only in case,
 a name of DMPlex's own labels, and a name that is the first word of a
 global option under the same prefix (a fracture called ``normal`` would
 make ``-thm_fracture_normal_stiffness`` ambiguous) are input errors.
+``label_named_boundaries`` labels the boundary groups by name from the
+"Face Sets" label PETSc's gmsh reader makes.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 from petthm.errors import InputError
+from petthm.mesh.topology import label_name
 
 #: what a group's name may be (PETSc cuts option values at spaces; an underscore would make the
 #: option suffixes ambiguous)
@@ -116,3 +119,30 @@ def check_names(groups: Iterable[Group], reserved: Mapping[str, set[str]] | None
         if kind and key in (reserved or {}).get(kind, set()):
             raise InputError(f"{where}: '{g.name}' is the first word of a global {PREFIXES[kind]}* option "
                              f"({PREFIXES[kind]}{key}_...); rename the group")
+
+
+#: the label PETSc's gmsh reader puts the physical tags of facets in
+FACE_SETS = "Face Sets"
+
+
+def label_named_boundaries(dm, groups: Iterable[Group]) -> None:
+    """One label per named boundary group (``topology.label_name``, as
+    ``plex.label_boundaries`` makes from coordinates): the facets of the
+    group's tag in the "Face Sets" label and their closure.  Before
+    distribution (the labels travel with the points).  A group that no facet
+    of the mesh carries is an input error naming it."""
+    from mpi4py import MPI
+    comm = dm.comm.tompi4py()
+    has = dm.hasLabel(FACE_SETS)
+    for g in groups:
+        size = dm.getStratumSize(FACE_SETS, g.tag) if has else 0
+        if comm.allreduce(size, op=MPI.SUM) == 0:
+            raise InputError(f"physical group '{g.name}' (dimension {g.dim}, tag {g.tag}) has no facets "
+                             "of the mesh: a boundary group is a set of faces of the mesh's cells")
+        name = label_name(g.name)
+        dm.createLabel(name)
+        label = dm.getLabel(name)
+        if size:
+            for p in dm.getStratumIS(FACE_SETS, g.tag).getIndices():
+                label.setValue(int(p), 1)
+        dm.labelComplete(label)

@@ -107,3 +107,52 @@ def test_the_option_table_reserves_the_words_of_the_contract():
     options = P.known_options(classes)
     assert {"normal", "heat", "residual", "aperture"} <= reserved_words(options, "fracture")
     assert "radius" in reserved_words(options, "well")
+
+
+def test_boundary_labels_by_name_are_those_by_coordinates(tmp_path):
+    """The labels of named boundary groups (the faces of a gmsh box named
+    west and top) hold the same points as plex.label_boundaries makes from
+    the faces' coordinates; the negative control: the east face's."""
+    gmsh = pytest.importorskip("gmsh")
+    import numpy as np
+    from petsc4py import PETSc
+
+    from petthm.mesh.groups import label_named_boundaries
+    from petthm.mesh.plex import label_boundaries, read_plex
+    from petthm.mesh.topology import label_name
+    from petthm.scenes.base import face
+    gmsh.initialize(["-v", "0"])
+    try:
+        gmsh.model.add("box")
+        box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [box], 1, name="rock")
+        faces = {}
+        for _, tag in gmsh.model.getBoundary([(3, box)], oriented=False):
+            c = gmsh.model.occ.getCenterOfMass(2, tag)
+            faces[tag] = c
+        west = [t for t, c in faces.items() if abs(c[0]) < 1e-9]
+        top = [t for t, c in faces.items() if abs(c[2] - 1) < 1e-9]
+        gmsh.model.addPhysicalGroup(2, west, 11, name="west")
+        gmsh.model.addPhysicalGroup(2, top, 12, name="top")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.34)
+        gmsh.model.mesh.generate(3)
+        gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
+        gmsh.write(str(tmp_path / "box.msh"))
+    finally:
+        gmsh.finalize()
+    path = str(tmp_path / "box.msh")
+    groups = [g for g in read_physical_names(path) if g.dim == 2]
+    by_name = read_plex(path, PETSc.COMM_WORLD)
+    label_named_boundaries(by_name, groups)
+    by_coords = read_plex(path, PETSc.COMM_WORLD)
+    label_boundaries(by_coords, {"west": face(0, 0.0), "top": face(2, 1.0), "east": face(0, 1.0)})
+
+    def points(dm, name):
+        return np.sort(dm.getStratumIS(label_name(name), 1).getIndices())
+    assert points(by_name, "west").size > 0
+    assert np.array_equal(points(by_name, "west"), points(by_coords, "west"))
+    assert np.array_equal(points(by_name, "top"), points(by_coords, "top"))
+    assert not np.array_equal(points(by_name, "west"), points(by_coords, "east"))
+    with pytest.raises(InputError, match=r"physical group 'ghost' \(dimension 2, tag 99\) has no facets"):
+        label_named_boundaries(by_name, [Group(2, 99, "ghost")])
