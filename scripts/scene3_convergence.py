@@ -17,7 +17,8 @@ the observed order p, the extrapolated value, and the fine-grid GCI
 1.25 |e21| / (r21**p - 1); each level is marked where it lies within 5 %
 of the extrapolated value (0.05 K for temperature drops, issue 49).
 Quantities that jump between events (the time of the largest aperture
-increase, the smallest traction) are listed per level.  Writes
+increase, its early maximum (the injection pressure's) and its thermal
+one, the smallest traction) are listed per level.  Writes
 DIR/scene3_convergence.{csv,md}.
 """
 from __future__ import annotations
@@ -30,6 +31,7 @@ import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from scene3_study import aperture_maxima
 from study_tables import ROOT, read_history, read_summary, write_csv
 
 YEAR = 365.25 * 86400.0
@@ -43,7 +45,11 @@ FLOOR_K = 0.05
 #: smooth quantities: name -> (unit, is a temperature drop)
 SMOOTH = {"dT_prod_10y": ("K", True), "dT_prod_20y": ("K", True), "dT_prod_30y": ("K", True),
           "da_max_mm": ("mm", False), "raised_area_30y_m2": ("m2", False), "p_inj_30y_MPa": ("MPa", False)}
-EVENTS = {"da_peak_years": "years", "lam_min_30y_MPa": "MPa"}
+#: quantities that jump between events, per level: the two maxima of the aperture history
+#: (scene3_study.aperture_maxima: the injection pressure's early one, the thermal one) and the
+#: smallest traction
+EVENTS = {"da_peak_years": "years", "da_early_mm": "mm", "da_early_years": "years", "da_thermal_mm": "mm",
+          "da_thermal_years": "years", "lam_min_30y_MPa": "MPa"}
 
 
 def level_options(level: int, ratio: float) -> list:
@@ -89,6 +95,9 @@ def quantities(d: str) -> dict:
     drop = params["thm_initial_temperature"] - h["production_temperature"]
     k = int(np.argmax(h["aperture_increase_max"]))
     out = {f"dT_prod_{y}y": float(np.interp(y, t, drop)) for y in (10, 20, 30)}
+    maxima = aperture_maxima(t, h["aperture_increase_max"])
+    for kind in ("early", "thermal"):
+        out[f"da_{kind}_mm"], out[f"da_{kind}_years"] = maxima[kind][0] * 1e3, maxima[kind][1]
     out.update(da_max_mm=float(h["aperture_increase_max"][k]) * 1e3, da_peak_years=float(t[k]),
                raised_area_30y_m2=float(h["raised_area"][-1]),
                p_inj_30y_MPa=float(h["injection_pressure"][-1]) / 1e6,
