@@ -203,15 +203,59 @@ def known_options(classes: Iterable[type]) -> set[str]:
     return {option_name(f) for cls in classes for f in dataclasses.fields(cls)}
 
 
-def check_unknown_thm_options(classes: Iterable[type], options: PETSc.Options | None = None) -> None:
-    """Every -thm_ option given must belong to one of ``classes``."""
+def check_unknown_thm_options(classes: Iterable[type], options: PETSc.Options | None = None,
+                              extra: Iterable[str] = ()) -> None:
+    """Every -thm_ option given must belong to one of ``classes`` or be one
+    of ``extra`` (names without the dash: the options of named groups,
+    ``named_options``); names match without regard to case, as PETSc's do."""
     opts = options or PETSc.Options()
-    known = known_options(classes)
+    known = known_options(classes) | {e.lower() for e in extra}
     for key in sorted(opts.getAll()):
-        if key.startswith(PREFIX) and key not in known:
+        if key.lower().startswith(PREFIX) and key.lower() not in known:
             close = difflib.get_close_matches(key, sorted(known), n=1)
             hint = f" (did you mean -{close[0]}?)" if close else ""
             raise InputError(f"unknown option -{key}{hint}")
+
+
+def named_option(kind: str, name: str, suffix: str) -> str:
+    """The option (without the dash, lower case) of one named group's value:
+    ``thm_KIND_NAME_SUFFIX`` (../shared/docs/reservoir.md section 2)."""
+    return f"{PREFIX}{kind}_{name}_{suffix}".lower()
+
+
+def _suffix(field_name: str, strip: str) -> str:
+    return field_name[len(strip):] if strip and field_name.startswith(strip) else field_name
+
+
+def named_options(cls, fields: Iterable[str], kind: str, names: Iterable[str], strip: str = "") -> set[str]:
+    """The options ``read_named`` reads for ``names``: one per field of
+    ``fields`` (of the parameter dataclass ``cls``) and name."""
+    present = {f.name for f in dataclasses.fields(cls)}
+    return {named_option(kind, n, _suffix(f, strip)) for f in fields if f in present for n in names}
+
+
+def read_named(p, fields: Iterable[str], kind: str, name: str, strip: str = "",
+               options: PETSc.Options | None = None):
+    """``p`` (a parameter object holding the global values) with each of
+    ``fields`` overridden where the named group's option is given:
+    ``-thm_KIND_NAME_SUFFIX``, SUFFIX the field's name less ``strip`` (a
+    region's ``-thm_region_NAME_rock_porosity`` overrides
+    ``-thm_rock_porosity``; a fracture's ``-thm_fracture_NAME_aperture``,
+    with ``strip="fracture_"``, ``-thm_fracture_aperture``).  Read, converted
+    and range-checked as the global option is; an error names the group's
+    option."""
+    opts = options or PETSc.Options()
+    by_name = {f.name: f for f in dataclasses.fields(p)}
+    values = {}
+    for field_name in fields:
+        f = by_name[field_name]
+        option = named_option(kind, name, _suffix(field_name, strip))
+        if not opts.hasName(option):
+            continue
+        g = dataclasses.field(default=f.default, metadata={**f.metadata, "option": option})
+        values[field_name] = _convert(g, opts.getString(option, ""))
+        _check(g, values[field_name])
+    return dataclasses.replace(p, **values)
 
 
 def help_text(classes: Iterable[type]) -> str:
