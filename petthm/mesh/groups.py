@@ -20,6 +20,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 from petthm.errors import InputError
+from petthm.mesh.fracture import FACE_SETS
 from petthm.mesh.topology import label_name
 
 #: what a group's name may be (PETSc cuts option values at spaces; an underscore would make the
@@ -119,10 +120,6 @@ def check_names(groups: Iterable[Group], reserved: Mapping[str, set[str]] | None
         if kind and key in (reserved or {}).get(kind, set()):
             raise InputError(f"{where}: '{g.name}' is the first word of a global {PREFIXES[kind]}* option "
                              f"({PREFIXES[kind]}{key}_...); rename the group")
-
-
-#: the label PETSc's gmsh reader puts the physical tags of facets in
-FACE_SETS = "Face Sets"
 
 
 def label_named_boundaries(dm, groups: Iterable[Group]) -> None:

@@ -23,6 +23,26 @@ $EndNodes
 """
 
 
+def _box_file(path, groups, version=2.2, binary=False):
+    """Mesh the unit cube with gmsh and write it to ``path``; ``groups(gmsh,
+    box)`` adds the physical groups.  The gmsh module, or the test is skipped."""
+    gmsh = pytest.importorskip("gmsh")
+    gmsh.initialize(["-v", "0"])
+    try:
+        gmsh.model.add("box")
+        box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        groups(gmsh, box)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.34)
+        gmsh.model.mesh.generate(3)
+        gmsh.option.setNumber("Mesh.MshFileVersion", version)
+        gmsh.option.setNumber("Mesh.Binary", int(binary))
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return str(path)
+
+
 def test_the_names_of_a_version_2_file_are_read(tmp_path):
     (tmp_path / "v2.msh").write_text(MSH22)
     assert read_physical_names(str(tmp_path / "v2.msh")) == [
@@ -31,21 +51,11 @@ def test_the_names_of_a_version_2_file_are_read(tmp_path):
 
 @pytest.mark.parametrize("binary", [False, True])
 def test_the_names_of_a_version_4_file_from_gmsh_are_read(tmp_path, binary):
-    gmsh = pytest.importorskip("gmsh")
-    gmsh.initialize(["-v", "0"])
-    try:
-        gmsh.model.add("groups")
-        box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
-        gmsh.model.occ.synchronize()
+    def groups(gmsh, box):
         gmsh.model.addPhysicalGroup(3, [box], 5, name="Reservoir")
         gmsh.model.addPhysicalGroup(2, [1], 9, name="west")
-        gmsh.model.mesh.generate(3)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.option.setNumber("Mesh.Binary", int(binary))
-        gmsh.write(str(tmp_path / "g.msh"))
-    finally:
-        gmsh.finalize()
-    assert sorted(read_physical_names(str(tmp_path / "g.msh")), key=lambda g: g.dim) == \
+    path = _box_file(tmp_path / "g.msh", groups, version=4.1, binary=binary)
+    assert sorted(read_physical_names(path), key=lambda g: g.dim) == \
         [Group(2, 9, "west"), Group(3, 5, "Reservoir")]
 
 
@@ -113,7 +123,6 @@ def test_boundary_labels_by_name_are_those_by_coordinates(tmp_path):
     """The labels of named boundary groups (the faces of a gmsh box named
     west and top) hold the same points as plex.label_boundaries makes from
     the faces' coordinates; the negative control: the east face's."""
-    gmsh = pytest.importorskip("gmsh")
     import numpy as np
     from petsc4py import PETSc
 
@@ -121,27 +130,14 @@ def test_boundary_labels_by_name_are_those_by_coordinates(tmp_path):
     from petthm.mesh.plex import label_boundaries, read_plex
     from petthm.mesh.topology import label_name
     from petthm.scenes.base import face
-    gmsh.initialize(["-v", "0"])
-    try:
-        gmsh.model.add("box")
-        box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
-        gmsh.model.occ.synchronize()
+
+    def add_groups(gmsh, box):
         gmsh.model.addPhysicalGroup(3, [box], 1, name="rock")
-        faces = {}
-        for _, tag in gmsh.model.getBoundary([(3, box)], oriented=False):
-            c = gmsh.model.occ.getCenterOfMass(2, tag)
-            faces[tag] = c
-        west = [t for t, c in faces.items() if abs(c[0]) < 1e-9]
-        top = [t for t, c in faces.items() if abs(c[2] - 1) < 1e-9]
-        gmsh.model.addPhysicalGroup(2, west, 11, name="west")
-        gmsh.model.addPhysicalGroup(2, top, 12, name="top")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.34)
-        gmsh.model.mesh.generate(3)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
-        gmsh.write(str(tmp_path / "box.msh"))
-    finally:
-        gmsh.finalize()
-    path = str(tmp_path / "box.msh")
+        faces = {tag: gmsh.model.occ.getCenterOfMass(2, tag)
+                 for _, tag in gmsh.model.getBoundary([(3, box)], oriented=False)}
+        gmsh.model.addPhysicalGroup(2, [t for t, c in faces.items() if abs(c[0]) < 1e-9], 11, name="west")
+        gmsh.model.addPhysicalGroup(2, [t for t, c in faces.items() if abs(c[2] - 1) < 1e-9], 12, name="top")
+    path = _box_file(tmp_path / "box.msh", add_groups)
     groups = [g for g in read_physical_names(path) if g.dim == 2]
     by_name = read_plex(path, PETSc.COMM_WORLD)
     label_named_boundaries(by_name, groups)

@@ -191,9 +191,9 @@ class RecoveredTraction:
     node of u's trace, (nc, nb, d, d): the rock's gradient averaged over the
     cells around the node on that side, ``monitors.wall_gradients``; for
     the nodal rule, whose points are those nodes: u has the highest
-    degree of the fields), or without it the
-    gradient in the one rock cell next to each face.  ``face_load(side,
-    ctx)`` (nc, nq, d): h_s, or None."""
+    degree of the fields; the model holds None, and
+    ``monitors.recovered_traction`` sets it).  ``face_load(side, ctx)``
+    (nc, nq, d): h_s, or None."""
     mech: FractureMechanics
     elastic: Elastic                         # the rock's
     face_load: Callable | None = None
@@ -201,8 +201,8 @@ class RecoveredTraction:
 
     def on_side(self, side: Side, ctx):
         """lam*_s (nc, nq) at the fracture's points."""
-        G = None if self.wall_gradient is None else ctx.cell_values(self.wall_gradient[side])
-        if G is not None and G.shape[1] != ctx.shape[1]:
+        G = ctx.cell_values(self.wall_gradient[side])
+        if G.shape[1] != ctx.shape[1]:
             raise ValueError(f"wall_gradient has {G.shape[1]} nodes per face and the rule {ctx.shape[1]} "
                              "points: it is evaluated at the nodes of u's trace (the nodal rule)")
         sigma = wall_stress(self.elastic, side, ctx, G)

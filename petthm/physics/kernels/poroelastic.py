@@ -25,7 +25,6 @@ import numpy as np
 
 from petthm.discretisation.model import (
     MATRIX,
-    Adjacent,
     CellJacobian,
     CellResidual,
     FacetTerm,
@@ -76,13 +75,12 @@ def stress(el: Elastic, ctx):
     return _stress_of(el, ctx, ctx.grad(el.u), el.p, el.T)
 
 
-def wall_stress(el: Elastic, side: Side, ctx, gradient=None):
+def wall_stress(el: Elastic, side: Side, ctx, gradient):
     """sigma (nc, nq, d, d) on the rock's face on ``side`` of the fracture,
     at the fracture's points (``ctx`` of a fracture region): from the
-    displacement gradient ``gradient`` (nc, nq, d, d; default: that of u in
-    the rock cell next to each face) and pm and Tm on that face."""
-    G = ctx.grad(Adjacent(el.u, side)) if gradient is None else gradient
-    return _stress_of(el, ctx, G, el.p and Trace(el.p, side), el.T and Trace(el.T, side))
+    displacement gradient ``gradient`` (nc, nq, d, d) there and pm and Tm on
+    that face."""
+    return _stress_of(el, ctx, gradient, el.p and Trace(el.p, side), el.T and Trace(el.T, side))
 
 
 def _stress_of(el: Elastic, ctx, G, p, T):
