@@ -11,12 +11,14 @@ def _help_requested(argv):
     return any(a in ("-help", "--help", "-h") for a in argv)
 
 
-def _scene_help(name):
+def _scene_help(name, args=()):
     from petthm import params as P
     from petthm.scenes import scene_class
     cls = scene_class(name)
+    mesh = next((args[i + 1] for i, a in enumerate(args[:-1]) if a.lower() == "-thm_mesh_file"), "")
+    named = cls.named_help(mesh)
     lines = [f"{name}: {cls.description}", "", "parameters (-option  default  unit  meaning):",
-             P.help_text((P.RunParams,) + tuple(cls.parameters)), "",
+             P.help_text((P.RunParams,) + tuple(cls.parameters)), *([named] if named else []), "",
              _water_help(cls),
              f"time defaults: final {cls.time.final_time:g} s, first step {cls.time.dt_initial:g} s, "
              f"growth {cls.time.dt_growth:g}, largest step {cls.time.dt_max:g} s",
@@ -41,6 +43,20 @@ def _list_help():
     lines += [f"  {n:<18} {scenes[n].description}" for n in sorted(scenes)]
     lines += ["", "python -m petthm SCENE -help lists a scene's parameters with units and defaults."]
     return "\n".join(lines)
+
+
+def _help(scene, rest, rank) -> int:
+    """-help: the scenes, or one scene's options (with a deck's mesh: its names' options too)."""
+    from petthm.errors import InputError
+    from petthm.scenes import MODULES
+    if scene and scene not in MODULES:
+        return _fail(f"unknown scene '{scene}'; scenes: {', '.join(sorted(MODULES))}", rank)
+    if rank == 0:
+        try:
+            print(_scene_help(scene, rest) if scene else _list_help())
+        except InputError as e:
+            return _fail(str(e), rank)
+    return 0
 
 
 def _fail(msg: str, rank: int) -> int:
@@ -146,12 +162,7 @@ def main(argv=None) -> int:
     rest = argv[1:] if scene else argv
     rank = int(os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")))
     if _help_requested(argv):
-        from petthm.scenes import MODULES
-        if scene and scene not in MODULES:
-            return _fail(f"unknown scene '{scene}'; scenes: {', '.join(sorted(MODULES))}", rank)
-        if rank == 0:
-            print(_scene_help(scene) if scene else _list_help())
-        return 0
+        return _help(scene, rest, rank)
     if scene is None:
         return _fail(f"no scene given\n{USAGE}\n(python -m petthm -help lists the scenes)", rank)
     bad = check_arguments(rest)

@@ -53,6 +53,22 @@ class Expression:
         self.symbols: set[str] = set()
         self._check(self._tree)
 
+    def __str__(self) -> str:
+        return self.text
+
+    def __repr__(self) -> str:
+        return f"Expression({self.text!r})"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Expression) and other.text == self.text
+
+    def __hash__(self) -> int:
+        return hash(self.text)
+
+    def in_dimension(self, dim: int) -> Expression:
+        """The same text checked for a mesh of ``dim`` dimensions (in 2D there is no z)."""
+        return self if dim == self.dim else Expression(self.text, self.option, dim)
+
     @property
     def constant(self) -> bool:
         """Whether the value does not depend on position."""
@@ -147,3 +163,24 @@ def split_list(text: str) -> list[str]:
             start = k + 1
     items.append(text[start:])
     return [s.strip() for s in items]
+
+
+def number_or_expression(option: str) -> Callable:
+    """A parser of option ``-option``'s value (``params.param(parse=...)``):
+    a float for a number, else an ``Expression`` of position (checked for
+    3D; ``Expression.in_dimension`` re-checks it for a 2D mesh)."""
+    def parse(text):
+        if isinstance(text, (int, float, Expression)):
+            return float(text) if not isinstance(text, Expression) else text
+        try:
+            return float(text)
+        except ValueError:
+            return Expression(str(text), "-" + option)
+    return parse
+
+
+def values_at(value, points) -> np.ndarray:
+    """A number or an ``Expression`` at ``points`` (n, d): (n,) floats."""
+    if isinstance(value, Expression):
+        return value.in_dimension(np.shape(points)[-1])(points)
+    return np.full(len(points), float(value))

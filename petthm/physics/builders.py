@@ -123,16 +123,20 @@ class ModelBuilder:
 
     # -- rock ---------------------------------------------------------------------------
     def elasticity(self, degree: int, *, biot: bool = False, thermal: bool = False,
-                   body_force: tuple = ()) -> pe.Elastic:
+                   body_force: tuple = (), p_ref=None, T_ref=None) -> pe.Elastic:
         """u with drained elasticity (E, nu), the Biot coupling to pm
         (alpha, p0 when the scene has -thm_initial_pressure) and the thermal
-        strain of Tm (beta_s, T0)."""
+        strain of Tm (beta_s, T0); ``p_ref``, ``T_ref`` (K): the in-situ
+        pressure and temperature where they are not those numbers (functions
+        of position, ``poroelastic.at_points``)."""
         p = self.p
         kw = {}
         if biot:           # sigma carries alpha (pm - p0): u is the displacement from the in-situ state
-            kw.update(p="pm", biot=p.rock_biot_coefficient, p_ref=getattr(p, "initial_pressure", 0.0))
+            kw.update(p="pm", biot=p.rock_biot_coefficient,
+                      p_ref=getattr(p, "initial_pressure", 0.0) if p_ref is None else p_ref)
         if thermal:
-            kw.update(T="Tm", thermal_expansion=p.rock_thermal_expansion, T_ref=p.T0)
+            kw.update(T="Tm", thermal_expansion=p.rock_thermal_expansion,
+                      T_ref=p.T0 if T_ref is None else T_ref)
         self.elastic = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, self.dim,
                                   body_force=body_force, **kw)
         self.model.add_field(FieldSpec("u", self.dim, degree, unit="m"))
@@ -141,14 +145,20 @@ class ModelBuilder:
 
     def matrix_flow(self, degree: int, *, permeability: np.ndarray, storage: float,
                     thermal_storage: float = 0.0, heat: bool = False,
-                    source: Callable | None = None) -> fk.Flow:
-        """pm: S dp/dt - B dT/dt + div(-k/mu grad p) = s (with ``heat``: mu(Tm), B;
-        ``source`` s(x, t), 1/s: the manufactured solutions)."""
+                    source: Callable | None = None, gravity: tuple = (),
+                    reference_pressure: float | None = None,
+                    reference_temperature: float | None = None) -> fk.Flow:
+        """pm: S dp/dt - B dT/dt + div(-k/mu (grad p - rho_f g)) = s (with
+        ``heat``: mu(Tm), B; ``source`` s(x, t), 1/s: the manufactured
+        solutions; ``gravity``: the vector rho_f g, N/m3).  The reference
+        state of the stored water: -thm_initial_pressure and T0 unless given."""
+        p = self.p
+        p0 = getattr(p, "initial_pressure", 0.0) if reference_pressure is None else reference_pressure
+        T0 = (p.T0 if reference_temperature is None else reference_temperature) if heat else 0.0
         fl = fk.Flow(Domain.MATRIX, "pm", "Tm" if heat else None, storage, permeability,
-                     self.p.fluid_viscosity,
+                     p.fluid_viscosity,
                      thermal_storage if heat else 0.0, source=source,
-                     reference_pressure=getattr(self.p, "initial_pressure", 0.0),
-                     reference_temperature=self.p.T0 if heat else 0.0)
+                     reference_pressure=p0, reference_temperature=T0, gravity=tuple(gravity))
         self.model.add_field(FieldSpec("pm", 1, degree, unit="Pa"))
         self.model.add(fk.flow_terms(fl))
         self.flows[Domain.MATRIX] = fl

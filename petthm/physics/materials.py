@@ -12,7 +12,10 @@ mesh sizes, a scene's case switches) stay with the scene as
 
 Values that are not plain numbers are parsed once, when read:
 ``fluid_viscosity`` into a ``fluid.Viscosity``, ``insitu_stress`` into an
-``InSituStress``, ``fracture_heat_exchange`` into an ``Exchange``.
+``InSituStress``, ``fracture_heat_exchange`` into an ``Exchange``; the
+initial state (``initial_temperature``, ``initial_pressure`` and the
+components of ``insitu_stress``) into a number or, for a deck, an
+``expressions.Expression`` of position.
 """
 from __future__ import annotations
 
@@ -23,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from petthm.errors import InputError
+from petthm.expressions import Expression, number_or_expression, split_list
 from petthm.params import CELSIUS, DISCRETISATION, PHYSICS, param
 from petthm.physics.fluid import Viscosity
 
@@ -83,7 +87,12 @@ class InSituStress:
     components: tuple
 
     def __str__(self) -> str:
-        return ",".join(f"{c:g}" for c in self.components)
+        return ",".join(str(c) if isinstance(c, Expression) else f"{c:g}" for c in self.components)
+
+    @property
+    def varies(self) -> bool:
+        """Whether a component is an expression of position."""
+        return any(isinstance(c, Expression) for c in self.components)
 
     @property
     def tensor(self) -> np.ndarray | None:
@@ -119,13 +128,15 @@ class InSituStress:
 
 
 def parse_insitu_stress(text) -> InSituStress:
-    vals = text if isinstance(text, tuple) else tuple(v for v in str(text).split(","))
-    try:
-        comps = tuple(float(v) for v in vals)
-    except ValueError:
+    """One number, or six numbers or expressions of position (a deck's; the
+    scenes' own meshes take numbers, ``Scene.check_inputs``)."""
+    vals = text if isinstance(text, tuple) else tuple(split_list(str(text)))
+    parse = number_or_expression("thm_insitu_stress")
+    comps = tuple(parse(v) for v in vals)
+    if len(comps) == 1 and isinstance(comps[0], Expression):
         raise InputError(f"option -thm_insitu_stress = {text} is not one number or six "
-                         "(sxx,syy,szz,syz,sxz,sxy, Pa, compression positive)") from None
-    if len(comps) not in (1, 6) or not all(math.isfinite(c) for c in comps):
+                         "(sxx,syy,szz,syz,sxz,sxy, Pa, compression positive)")
+    if len(comps) not in (1, 6) or not all(isinstance(c, Expression) or math.isfinite(c) for c in comps):
         raise InputError(f"option -thm_insitu_stress = {text} takes one number or six finite ones "
                          "(sxx,syy,szz,syz,sxz,sxy, Pa, compression positive)")
     return InSituStress(comps)
@@ -140,8 +151,10 @@ DECLARED = {
     "rock_poisson_ratio": param(0.25, "-", "drained Poisson ratio nu", lo=0.0, hi=0.4999, kind=PHYSICS),
     "rock_biot_coefficient": param(0.8, "-", "Biot coefficient alpha", lo=0.0, hi=1.0, kind=PHYSICS),
     "rock_porosity": param(0.0, "-", "porosity phi", lo=0.0, hi=1.0, kind=PHYSICS),
-    "rock_permeability": param((1e-14,), "m2", "matrix permeability k_m: one value, or kxx,kyy[,kzz]",
-                               lo=0.0, kind=PHYSICS),
+    "rock_permeability": param((1e-14,), "m2", "matrix permeability k_m: one value, kxx,kyy[,kzz], or the "
+                               "full tensor kxx,kyy,kzz,kyz,kxz,kxy (2D: kxx,kyy,kxy), positive "
+                               "semi-definite",
+                               kind=PHYSICS),
     "rock_density": param(2650.0, "kg/m3", "rock density rho_s", **_POS, kind=PHYSICS),
     "rock_heat_capacity": param(800.0, "J/(kg K)", "rock heat capacity C_s", **_POS, kind=PHYSICS),
     "rock_conductivity": param(2.9, "W/(m K)", "rock thermal conductivity lambda_s", **_POS, kind=PHYSICS),
@@ -193,8 +206,11 @@ DECLARED = {
                                  "factors of the step's start are kept more often; theory manual, limited "
                                  "flux correction)", lo=0.0, lo_open=True, kind=DISCRETISATION),
     # state and wells (sections 2, 9)
-    "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0", kind=PHYSICS),
-    "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0", kind=PHYSICS),
+    "initial_temperature": param(80.0, "degC", "initial rock and fluid temperature T0 (a deck: or an "
+                                 "expression of x, y, z)",
+                                 parse=number_or_expression("thm_initial_temperature"), kind=PHYSICS),
+    "initial_pressure": param(0.0, "Pa", "initial fluid pressure p0 (a deck: or an expression of x, y, z)",
+                              parse=number_or_expression("thm_initial_pressure"), kind=PHYSICS),
     "insitu_stress": param("60e6", "Pa", "in-situ stress: compressive normal stress on the fracture, or "
                            "sxx,syy,szz,syz,sxz,sxy (compression positive)", parse=parse_insitu_stress,
                            kind=PHYSICS),
@@ -294,18 +310,40 @@ class Parameters:
         self.insitu_stress.check_frictionless(normal)
         return self.insitu_stress.normal(normal)
 
-    def permeability(self, dim: int) -> np.ndarray:
-        """The permeability tensor (dim, dim) from one value or dim values."""
+    def permeability(self, dim: int, option: str = "-thm_rock_permeability") -> np.ndarray:
+        """The permeability tensor (dim, dim) from one value, the dim
+        diagonal values, or the full symmetric tensor (3D: kxx,kyy,kzz,kyz,kxz,kxy;
+        2D: kxx,kyy,kxy), which must be positive semi-definite."""
+        K = self._permeability_tensor(dim, option)
         k = self.rock_permeability
+        low = float(np.linalg.eigvalsh(K).min())
+        if low < -1e-12 * float(np.abs(K).max()):
+            raise InputError(f"option {option} = {','.join(f'{v:g}' for v in k)} is not positive "
+                             f"semi-definite (an eigenvalue is {low:.4g} m2)")
+        return K
+
+    def _permeability_tensor(self, dim: int, option: str) -> np.ndarray:
+        k = self.rock_permeability
+        full = 6 if dim == 3 else 3
         if len(k) == 1:
             return k[0] * np.eye(dim)
         if len(k) == dim:
             return np.diag(k)
-        raise InputError(f"option -thm_rock_permeability takes 1 or {dim} values, got {len(k)}")
+        if len(k) != full:
+            raise InputError(f"option {option} takes 1, {dim} or {full} values "
+                             f"({'kxx,kyy,kzz,kyz,kxz,kxy' if dim == 3 else 'kxx,kyy,kxy'}), got {len(k)}")
+        pairs = VOIGT if dim == 3 else ((0, 0), (1, 1), (0, 1))
+        K = np.zeros((dim, dim))
+        for (i, j), v in zip(pairs, k, strict=True):
+            K[i, j] = K[j, i] = v
+        return K
 
     def isotropic_permeability(self) -> float:
         """The one value of an isotropic permeability (scenes with a 1D reference solution)."""
         k = self.rock_permeability
+        if min(k) < 0:
+            raise InputError(f"option -thm_rock_permeability = {','.join(map(str, k))} is negative: a "
+                             "permeability is >= 0 m2")
         if len(set(k)) != 1:
             raise InputError(f"option -thm_rock_permeability = {','.join(map(str, k))}: this scene "
                              "takes one (isotropic) value")

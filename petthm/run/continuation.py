@@ -33,7 +33,7 @@ def end_time(scene) -> float:
 def option_record(scene, proposals) -> dict:
     """Every option in effect with its kind (``params.option_record``; of the
     PETSc options the user's, not the ``proposals``), as JSON reads it back."""
-    record = P.option_record((scene.run, scene.p), proposals.users_options())
+    record = P.option_record(scene.parameter_sets(), proposals.users_options())
     return json.loads(json.dumps(record, default=str))
 
 

@@ -33,7 +33,6 @@ from petthm.mesh.plex import (
     bounding_box,
     check_every_rank_has_cells,
     distribute,
-    label_boundaries,
     read_plex,
 )
 from petthm.run.continuation import Continuation, end_time, option_record
@@ -55,7 +54,7 @@ def make_scene(name: str):
     if cls is None:
         raise InputError(f"unknown scene '{name}'; scenes: {', '.join(sorted(MODULES))}")
     run = P.read(P.RunParams)
-    P.check_unknown_thm_options((P.RunParams,) + tuple(cls.parameters))
+    P.check_unknown_thm_options((P.RunParams,) + tuple(cls.parameters), extra=cls.named_options(run))
     scene = cls.read(run)
     scene.check_inputs()
     return scene
@@ -155,7 +154,7 @@ class Run:
                              + (f" (option -{option} = {want})" if option else ""))
         scene.check_against_domain(*bounding_box(dm))
         with self._user_mesh_fits(dm.getDimension()):
-            label_boundaries(dm, scene.boundaries())
+            scene.label_mesh(dm)
         from petthm.mesh.fracture import split_fractures
         dm, _ = split_fractures(dm)
         dm = distribute(dm)
@@ -363,7 +362,8 @@ class Run:
             summary.update(self.monitor.report(self.problem, t_final))
             summary["provenance"] = {"git_commit": git_commit(), "mesh": self.mesh_path,
                                      "mesh_sha256": self.mesh_digest,
-                                     "parameters": P.values_in_effect(run) | P.values_in_effect(scene.p),
+                                     "parameters": {k: v for p in scene.parameter_sets()
+                                                    for k, v in P.values_in_effect(p).items()},
                                      "options": options_in_effect()}
             if write_failure is None:
                 if status == "failed":

@@ -18,7 +18,7 @@ MODULES = {
     "inclined_crack": "friction", "gravity_column": "mechanics", "thermal_stress": "mechanics",
     "heat_advection": "heat", "heat_erfc": "heat", "heat_mms": "heat", "inclined_penny": "scene3",
     "lauwerier": "lauwerier", "leakoff_heat": "scene1", "rigid_fracture": "scene1", "mandel": "poro",
-    "terzaghi": "poro", "penny_impermeable": "thm",
+    "terzaghi": "poro", "penny_impermeable": "thm", "reservoir": "reservoir",
 }
 
 

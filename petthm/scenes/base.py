@@ -199,14 +199,33 @@ class Scene:
         return self.dimension, ""
 
     # checks of the input ---------------------------------------------------------
+    #: whether the scene takes option values that are expressions of position (a deck's initial state)
+    takes_expressions: bool = False
+
     def check_inputs(self) -> None:
         """Values inside their option's range that are impossible for the
         scene, before anything is built (an ``InputError`` naming the option
-        and the bound): every temperature given where there is water must be
+        and the bound): an expression of position where the scene takes a
+        number, and every temperature given where there is water must be
         liquid water at the pressure there (``fluid.check_liquid``)."""
         from petthm.physics.fluid import check_liquid
+        if not self.takes_expressions:
+            self.check_numbers()
         for option, T, p_abs, where in self.water_temperatures():
             check_liquid(option, T, p_abs, where)
+
+    def check_numbers(self) -> None:
+        """An ``InputError`` for an option value that is an expression of
+        position (``expressions.Expression``): only decks take those."""
+        import dataclasses
+
+        from petthm.expressions import Expression
+        for f in dataclasses.fields(self.p):
+            value = getattr(self.p, f.name)
+            parts = getattr(value, "components", (value,))
+            if any(isinstance(v, Expression) for v in parts):
+                raise InputError(f"option -{P.option_name(f)} = {value}: scene {self.name} takes a number "
+                                 "here; expressions of x, y, z are for the reservoir scene's decks")
 
     def has_water(self) -> bool:
         """Whether the scene's rock or fracture holds water (it declares fluid properties)."""
@@ -258,8 +277,31 @@ class Scene:
                              f"extent is {smallest:.4g} m): less than {0.5 * smallest:.4g} m")
 
     # hooks ------------------------------------------------------------------
+    @classmethod
+    def named_options(cls, run: P.RunParams) -> set[str]:
+        """The options (without the dash) of the named groups of the run's
+        mesh that the scene reads besides its parameters (a deck's; none here)."""
+        return set()
+
+    def parameter_sets(self) -> tuple:
+        """The parameter objects whose options a run records (summary.json's
+        provenance, the checkpoint's record a restart is checked against)."""
+        return (self.run, self.p)
+
+    @classmethod
+    def named_help(cls, mesh_file: str) -> str:
+        """The -help lines of the options the named groups of ``mesh_file``
+        expand to ("" for a scene without them)."""
+        return ""
+
     def boundaries(self) -> dict[str, Callable[[np.ndarray], np.ndarray]]:
         return {}
+
+    def label_mesh(self, dm) -> None:
+        """Label the boundary parts of the mesh before it is distributed:
+        from ``boundaries()``' coordinate tests here."""
+        from petthm.mesh.plex import label_boundaries
+        label_boundaries(dm, self.boundaries())
 
     def generate_mesh(self, path: str, size: float) -> str:
         raise NotImplementedError

@@ -73,7 +73,9 @@ def test_unknown_scene_is_an_error(tmp_path):
     (("-thm_fluid_viscosity", "foo"), ("-thm_fluid_viscosity", "water")),
     (("-thm_fracture_heat_exchange", "-3"), ("-thm_fracture_heat_exchange", "nusselt")),
     (("-thm_fracture_heat_exchange", "nusselt"), ("-thm_fracture_heat_exchange", "permeable")),
-    (("-thm_rock_permeability", "1,2,3"), ("-thm_rock_permeability", "1 or 2 values")),
+    (("-thm_rock_permeability", "1,2,3,4"), ("-thm_rock_permeability", "1, 2 or 3 values")),
+    (("-thm_rock_permeability", "1,2,3"), ("-thm_rock_permeability", "not positive semi-definite")),
+    (("-thm_rock_permeability", "-1e-14"), ("-thm_rock_permeability", "not positive semi-definite")),
 ])
 def test_bad_fracture_input_is_a_one_line_error(tmp_path, opts, words):
     proc, _ = run_petthm("rigid_fracture", tmp_path, *opts, "-thm_mesh_size", 60,

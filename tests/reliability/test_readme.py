@@ -47,8 +47,9 @@ PRINTS_ERRORS = {
     "sneddon": ("-thm_sneddon_dim", 2, "-thm_fe_degree", 1),
     "inclined_crack": ("-thm_fe_degree", 1),
 }
-#: the scenes without a reference solution: the paper's scenes and partial_opening (its active set)
-NO_REFERENCE = {"rigid_fracture", "penny_impermeable", "inclined_penny", "partial_opening"}
+#: the scenes without a reference solution: the paper's scenes, partial_opening (its active set) and
+#: reservoir (a user's deck; its decks against exact results: tests/verification/test_reservoir.py)
+NO_REFERENCE = {"rigid_fracture", "penny_impermeable", "inclined_penny", "partial_opening", "reservoir"}
 
 
 @pytest.mark.parametrize("scene", sorted(PRINTS_ERRORS))

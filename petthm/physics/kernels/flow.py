@@ -7,7 +7,7 @@ scales them by the local aperture a(lam, g) and its storage gains da/dt.
 With mobility M(T) = 1/mu(T) and a constant "permeability" tensor K (the
 matrix permeability k_m, or a^3/12 I on the fracture), for the unknown p::
 
-    S dp/dt - B dT/dt + div q = s,        q = -M(T) K grad p
+    S dp/dt - B dT/dt + div q = s,        q = -M(T) K (grad p - rho_f g)
 
 Matrix: S = phi c_f + (alpha - phi)/K_s, B = phi beta_f.  Fracture:
 S = a c_f, B = a beta_f, and grad is the tangential gradient.  Weak form
@@ -53,6 +53,7 @@ class Flow:
     source: Callable | None = None   # s(x, t): a volume (area, on the fracture) source, 1/s
     reference_pressure: float = 0.0      # p0 of a deformable fracture's content a (1 + s)
     reference_temperature: float = 0.0   # T0 (K) of it
+    gravity: tuple = ()             # rho_f g (N/m3, a vector): q = -M K (grad p - rho_f g)
 
 
 # -- helpers ----------------------------------------------------------------------
@@ -75,11 +76,15 @@ def mobility(fl: Flow, ctx):
 
 
 def unit_darcy(fl: Flow, ctx):
-    return ctx.grad(fl.p)[:, :, 0, :] @ np.swapaxes(fl.permeability, -1, -2)
+    """K (grad p - rho_f g) (nc, nq, d), K without a deformable fracture's a^3."""
+    drive = ctx.grad(fl.p)[:, :, 0, :]
+    if fl.gravity:
+        drive = drive - np.asarray(fl.gravity, dtype=float)
+    return drive @ np.swapaxes(fl.permeability, -1, -2)
 
 
 def permeability_grad_p(fl: Flow, ctx):
-    """K grad p (nc, nq, d), K including a^3 in a deformable fracture."""
+    """K (grad p - rho_f g) (nc, nq, d), K including a^3 in a deformable fracture."""
     q, ap = unit_darcy(fl, ctx), aperture_state(fl, ctx)
     return q if ap is None else (ap.a ** 3)[..., None] * q
 

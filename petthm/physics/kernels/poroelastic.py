@@ -4,7 +4,8 @@ Biot term of the matrix flow equation (section 5).
     -div sigma = F,   sigma = C : eps(u) - alpha (p - p0) I - K beta_s (T - T0) I
 
 (tension positive; the in-situ stress sigma0 is in equilibrium and left out:
-u is the displacement from the in-situ state).  Weak form:
+u is the displacement from the in-situ state, whose pressure p0 and
+temperature T0 may vary with position).  Weak form:
 
     int grad w : sigma - int w . F - int_N w . t = 0
 
@@ -18,6 +19,7 @@ beta_s K T d(div u)/dt - phi beta_f T dp/dt, in the matrix heat equation.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 
@@ -43,10 +45,10 @@ class Elastic:
     u: str = "u"
     p: str | None = None           # pore pressure field (Biot coupling)
     biot: float = 0.0
-    p_ref: float = 0.0
+    p_ref: float | Callable = 0.0     # p0: a number or a function of position (points (n, d) -> (n,))
     T: str | None = None           # temperature field (thermal strain)
     thermal_expansion: float = 0.0    # volumetric beta_s
-    T_ref: float = 0.0
+    T_ref: float | Callable = 0.0     # T0 (K): likewise
     body_force: tuple = ()            # F (N/m3), constant: -div sigma = F
     region: Region = MATRIX
 
@@ -83,15 +85,24 @@ def wall_stress(el: Elastic, side: Side, ctx, gradient):
     return _stress_of(el, ctx, gradient, el.p and Trace(el.p, side), el.T and Trace(el.T, side))
 
 
+def at_points(reference, ctx):
+    """A reference value of the in-situ state at the quadrature points: the
+    number itself, or a function of position evaluated there (nc, nq)."""
+    if not callable(reference):
+        return reference
+    x = ctx.x
+    return np.asarray(reference(x.reshape(-1, x.shape[-1])), dtype=float).reshape(x.shape[:-1])
+
+
 def _stress_of(el: Elastic, ctx, G, p, T):
     """sigma from the displacement gradient G (nc, nq, d, d) and the pressure
     and temperature references ``p``, ``T`` (None: not coupled)."""
     eps = 0.5 * (G + np.swapaxes(G, 2, 3))
     iso = el.lame * np.trace(eps, axis1=2, axis2=3)
     if p is not None and el.biot:
-        iso = iso - el.biot * (ctx.value(p)[..., 0] - el.p_ref)
+        iso = iso - el.biot * (ctx.value(p)[..., 0] - at_points(el.p_ref, ctx))
     if T is not None and el.thermal_expansion:
-        iso = iso - el.bulk * el.thermal_expansion * (ctx.value(T)[..., 0] - el.T_ref)
+        iso = iso - el.bulk * el.thermal_expansion * (ctx.value(T)[..., 0] - at_points(el.T_ref, ctx))
     return 2 * el.shear * eps + iso[..., None, None] * np.eye(el.dim)
 
 

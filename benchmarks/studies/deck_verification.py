@@ -1,0 +1,50 @@
+"""The decks of tests/verification/test_reservoir.py with their measured
+errors, printed as the table of the manual (user guide, decks: "How well").
+
+    python benchmarks/studies/deck_verification.py [--out DIR]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import sys
+import tempfile
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "tests" / "verification")]
+import test_reservoir as decks  # noqa: E402
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default="", help="folder of the runs (default: a temporary one)")
+    out = pathlib.Path(ap.parse_args().out or tempfile.mkdtemp(prefix="decks"))
+    out.mkdir(parents=True, exist_ok=True)
+    os.chdir(ROOT)
+    meshes = decks.column_meshes(out)
+    rows = []
+    for dim, degree in ((2, 1), (2, 2), (3, 1)):
+        e = decks.hydrostatic_error(out / f"hydrostatic{dim}d_p{degree}", meshes[dim], dim, degree)
+        rows.append((f"hydrostatic column, {dim}D P{degree}", "max abs(p - rho_f g depth) / (rho_f g H)", e))
+    ep, eT = decks.flux_errors(out / "flux", meshes[3])
+    rows += [("flux and heat flux, 3D P1", "max abs(p - exact) / 1 MPa", ep),
+             ("flux and heat flux, 3D P1", "max abs(T - exact) / 30 K", eT)]
+    for degree in (1, 2):
+        change = decks.at_rest_changes(out / f"rest_p{degree}", meshes[3], degree)
+        rows += [(f"deck at rest, P{degree} u", key, change[key])
+                 for key in ("u_max", "pm_change_max", "Tm_change_max")]
+    for dim in (2, 3):
+        error = decks.turned_error(out / f"turned{dim}", dim)
+        rows.append((f"turned box, {dim}D", "max abs(p - upright) / drop", error))
+    one, two = decks.ranks_changes(out / "ranks", meshes[3])
+    for key in ("u_max", "pm_change_max", "Tm_change_max"):
+        rows.append(("coupled deck, 2 ranks vs 1", f"{key} relative difference",
+                     abs(two[key] - one[key]) / abs(one[key])))
+    print("| deck | measure | measured |\n|---|---|---|")
+    for deck, measure, value in rows:
+        print(f"| {deck} | {measure} | {value:.2g} |")
+
+
+if __name__ == "__main__":
+    main()

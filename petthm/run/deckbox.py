@@ -1,0 +1,88 @@
+"""Command line of the deck geometry tool (manual: user guide, decks):
+
+    python -m petthm.run.deckbox --lower 0,0,-3000 --upper 2000,2000,-1000 --size 200 \\
+        --layers granite:-2000,sandstone:-1000 --out reservoir.msh
+
+writes the mesh (``generate.layered_deck_box``: named layers, faces west,
+east, south, north, bottom, top) and beside it a starter options file
+(``reservoir.opts``) that names the mesh and lists every option of its
+boundaries, commented out, for the user to fill in.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from petthm.errors import InputError
+
+
+def _numbers(text: str, what: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"{what} = {text}: comma-separated numbers (x,y[,z])") from None
+
+
+def _layers(text: str) -> list[tuple[str, float]]:
+    out = []
+    for item in filter(None, text.split(",")):
+        name, _, top = item.partition(":")
+        try:
+            out.append((name, float(top)))
+        except ValueError:
+            raise InputError(f"--layers = {text}: NAME:TOP,... (a layer's name and the height of its "
+                             "top, from the bottom up)") from None
+    return out
+
+
+def starter_options(mesh: str, boundaries, regions) -> str:
+    """An options file for a deck on ``mesh``: the mesh, gravity, the
+    initial state, and every boundary's options commented out."""
+    import dataclasses
+
+    from petthm.scenes.reservoir import BoundaryValues
+    lines = [f"# a deck on {os.path.basename(mesh)} (regions: {', '.join(regions)}); "
+             "python -m petthm reservoir -options_file THIS_FILE",
+             f"-thm_mesh_file {mesh}", "-thm_gravity 9.81", "# -thm_initial_temperature 20+(-z)*0.03",
+             "# -thm_initial_pressure (-z)*9810",
+             "# -thm_insitu_stress sxx,syy,szz,syz,sxz,sxy  (compression positive; must balance gravity)"]
+    for name in boundaries:
+        lines.append(f"# boundary {name}")
+        lines += [f"# -thm_bc_{name}_{f.name} VALUE    ({f.metadata['unit']}: {f.metadata['help']})"
+                  for f in dataclasses.fields(BoundaryValues)]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m petthm.run.deckbox", description=__doc__.splitlines()[0])
+    ap.add_argument("--lower", required=True, help="the box's lowest corner, x,y[,z] (m; the last is up)")
+    ap.add_argument("--upper", required=True, help="the box's highest corner")
+    ap.add_argument("--size", type=float, required=True, help="mesh size (m)")
+    ap.add_argument("--layers", default="", help="NAME:TOP,... from the bottom up (default: one region rock)")
+    ap.add_argument("--rotation", type=float, default=0.0, help="turn the mesh about the vertical (degrees)")
+    ap.add_argument("--out", required=True,
+                    help="the mesh file to write (.msh); the options beside it (.opts)")
+    args = ap.parse_args(argv)
+    from petthm.mesh.generate import FACE_NAMES_2D, FACE_NAMES_3D, layered_deck_box
+    try:
+        lower, upper = _numbers(args.lower, "--lower"), _numbers(args.upper, "--upper")
+        if len(lower) != len(upper) or len(lower) not in (2, 3):
+            raise InputError("--lower and --upper: two or three coordinates each, the same number")
+        layers = _layers(args.layers)
+        if not args.out.endswith(".msh"):
+            raise InputError(f"--out = {args.out}: a .msh file")
+        layered_deck_box(args.out, lower, upper, args.size, layers, rotation=args.rotation)
+    except InputError as e:
+        print(f"petthm: error: {e}", file=sys.stderr)
+        return 2
+    faces = (FACE_NAMES_3D if len(lower) == 3 else FACE_NAMES_2D).values()
+    opts = os.path.splitext(args.out)[0] + ".opts"
+    with open(opts, "w") as f:
+        f.write(starter_options(args.out, faces, [n for n, _ in layers] or ["rock"]))
+    print(f"wrote {args.out} and {opts}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

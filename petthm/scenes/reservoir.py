@@ -1,0 +1,587 @@
+"""The ``reservoir`` scene: a user's reservoir as a deck, a gmsh mesh whose
+physical groups carry names and an options file that refers to them
+(``../shared/docs/reservoir.md``; manual: user guide, "Decks").
+
+What a deck holds here:
+
+* the mesh (``-thm_mesh_file``, required): its physical groups of the mesh's
+  dimension d are the rock's regions (every cell in one), those of dimension
+  d - 1 its boundaries, each named by its group's name;
+* the rock and fluid (the global ``-thm_rock_*`` and ``-thm_fluid_*``
+  options; the permeability may be a full tensor);
+* the fields (``-thm_fields``, default every field the deck has: u, pm where
+  the permeability is not zero, Tm);
+* gravity (``-thm_gravity``, default 0 in a deck), along -z (-y in 2D): in
+  Darcy's law q = -k/mu (grad p - rho_f g), and in the in-situ stress's
+  balance;
+* the initial state, numbers or expressions of x, y, z
+  (``-thm_initial_temperature``, ``-thm_initial_pressure``,
+  ``-thm_insitu_stress``): u is measured from it, so the in-situ stress must
+  balance gravity (``check_equilibrium``);
+* boundary conditions by name (``-thm_bc_NAME_*``, ``BoundaryValues``);
+  a boundary without one has no flow, no heat flux and keeps its in-situ
+  traction.
+
+Fractures, wells and per-region rock properties are not part of a deck
+yet: their options are refused with an error that says so.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from petthm import params as P
+from petthm.discretisation import probes
+from petthm.discretisation.assembly import FieldScale
+from petthm.discretisation.constraints import Dirichlet
+from petthm.discretisation.model import FacetTerm, Range
+from petthm.errors import InputError
+from petthm.expressions import Expression, split_list, values_at
+from petthm.mesh import groups as mg
+from petthm.params import CELSIUS, DISCRETISATION, PHYSICS, param
+from petthm.physics import materials as mt
+from petthm.physics.builders import ModelBuilder
+from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults
+from petthm.solvers.options import direct_solver_defaults
+
+#: the fields a deck may have (rock only)
+DECK_FIELDS = ("u", "pm", "Tm")
+#: the cell label PETSc's gmsh reader makes from the physical groups of the cells
+CELL_SETS = "Cell Sets"
+#: what a deck cannot hold yet: the option prefixes and what they would set
+NOT_YET = {"thm_region_": "per-region rock properties", "thm_fracture_": "fractures",
+           "thm_fractures": "fractures", "thm_well_": "wells", "thm_wells": "wells"}
+
+
+@dataclass(frozen=True)
+class DeckParams:
+    """Deck (reservoir)"""
+    fields: str = param("", "-", "the fields to solve for, a comma list of u, pm, Tm (default: every field "
+                        "the deck has: u, Tm, and pm where the permeability is not zero)",
+                        kind=DISCRETISATION)
+    equilibrium_tolerance: float = param(1e-6, "-", "the largest imbalance div sigma0 + rho_b g of the "
+                                         "in-situ stress accepted, relative to rho_b g (without gravity: "
+                                         "to the stress's largest value over the domain's extent)",
+                                         lo=0.0, lo_open=True, kind=PHYSICS)
+
+
+@dataclass(frozen=True)
+class BoundaryValues:
+    """The conditions on one named boundary: ``-thm_bc_NAME_SUFFIX``, read by
+    ``params.read_named`` (kind ``bc``); numbers or expressions of x, y, z."""
+    pressure: str = param("", "Pa", "pressure held on the boundary", kind=PHYSICS)
+    temperature: str = param("", "degC", "temperature held on the boundary", kind=PHYSICS)
+    flux: str = param("", "m/s", "water flux out through the boundary (Darcy velocity . n)", kind=PHYSICS)
+    heat_flux: str = param("", "W/m2", "conductive heat flux out through the boundary", kind=PHYSICS)
+    normal_displacement: str = param("", "m", "displacement along the outward normal (a plane face normal "
+                                     "to an axis)", kind=PHYSICS)
+    displacement: str = param("", "m", "displacement ux,uy[,uz]", kind=PHYSICS)
+    normal_stress: str = param("", "Pa", "total normal stress on the boundary, compression positive",
+                               kind=PHYSICS)
+    traction: str = param("", "Pa", "total traction tx,ty[,tz] on the boundary", kind=PHYSICS)
+
+
+#: the field each boundary value acts on
+BC_FIELD = {"pressure": "pm", "temperature": "Tm", "flux": "pm", "heat_flux": "Tm",
+            "normal_displacement": "u", "displacement": "u", "normal_stress": "u", "traction": "u"}
+BC_SUFFIXES = tuple(f.name for f in dataclasses.fields(BoundaryValues))
+
+
+# -- the mesh's names -----------------------------------------------------------------------
+@dataclass(frozen=True)
+class DeckGroups:
+    """The named groups of a deck's mesh: its dimension, regions and boundaries."""
+    dim: int
+    regions: tuple
+    boundaries: tuple
+
+    def region_of_tag(self, tag: int) -> str:
+        return next((g.name for g in self.regions if g.tag == tag), f"tag {tag}")
+
+
+def deck_groups(path: str, comm) -> DeckGroups:
+    """Read and classify the named groups of the deck's mesh (collective)."""
+    if not path:
+        raise InputError("scene reservoir needs -thm_mesh_file F.msh: a gmsh mesh whose physical groups name "
+                         "the rock's regions and boundaries (manual: user guide, decks)")
+    if not path.endswith(".msh"):
+        raise InputError(f"option -thm_mesh_file = {path}: a deck's mesh is a gmsh .msh file (2.2 or 4.1)")
+    return classify(mg.named_groups(path, comm), path)
+
+
+def classify(groups, path: str) -> DeckGroups:
+    """The regions (the groups of the largest dimension) and boundaries (one
+    dimension less) among a mesh's named groups, their names checked."""
+    if not groups:
+        raise InputError(f"option -thm_mesh_file = {path}: the mesh has no named physical groups; a deck "
+                         "refers to its regions and boundaries by name")
+    dim = max(g.dim for g in groups)
+    if dim not in (2, 3):
+        raise InputError(f"option -thm_mesh_file = {path}: its largest named group has dimension {dim}; a "
+                         "deck's regions are groups of dimension 2 (plane strain) or 3")
+    regions = tuple(g for g in groups if g.dim == dim)
+    boundaries = tuple(g for g in groups if g.dim == dim - 1)
+    kinds = {g.name: "region" for g in regions} | {g.name: "bc" for g in boundaries}
+    mg.check_names(regions + boundaries, kinds=kinds)
+    return DeckGroups(dim, regions, boundaries)
+
+
+def did_you_mean(word: str, names) -> str:
+    import difflib
+    close = difflib.get_close_matches(word.lower(), [n.lower() for n in names], n=1)
+    return f" (did you mean {close[0]}?)" if close else ""
+
+
+def check_not_yet(options=None) -> None:
+    """An input error for the options of what a deck cannot hold yet (``NOT_YET``)."""
+    from petsc4py import PETSc
+    opts = options or PETSc.Options()
+    for key in sorted(opts.getAll()):
+        low = key.lower()
+        for prefix, what in NOT_YET.items():
+            if low.startswith(prefix):
+                raise InputError(f"option -{key}: {what} are not part of a reservoir deck yet (the rock "
+                                 "takes the global -thm_rock_* values; fractures and wells: the paper's "
+                                 "scenes)")
+
+
+def unknown_boundary_options(groups: DeckGroups, options=None) -> None:
+    """An input error for a -thm_bc_NAME_* option whose NAME is not a boundary of the mesh."""
+    from petsc4py import PETSc
+    opts = options or PETSc.Options()
+    names = [g.name for g in groups.boundaries]
+    known = {n.lower() for n in names}
+    for key in sorted(opts.getAll()):
+        low = key.lower()
+        if not low.startswith("thm_bc_"):
+            continue
+        name = low[len("thm_bc_"):].split("_")[0]
+        if name not in known:
+            raise InputError(f"option -{key}: the mesh has no boundary '{name}'{did_you_mean(name, names)}; "
+                             f"its boundaries: {', '.join(names) or 'none'}")
+        suffix = low[len("thm_bc_") + len(name) + 1:]
+        if suffix not in BC_SUFFIXES:
+            raise InputError(f"option -{key}: a boundary takes {', '.join(BC_SUFFIXES)}"
+                             f"{did_you_mean(suffix, BC_SUFFIXES)}")
+
+
+# -- values of position ---------------------------------------------------------------------
+def expression(text: str, option: str, dim: int) -> Expression:
+    return Expression(text, option, dim)
+
+
+def vector_expressions(text: str, option: str, dim: int) -> list[Expression]:
+    items = split_list(text)
+    if len(items) != dim:
+        raise InputError(f"option {option} = {text}: {dim} components ({'ux,uy,uz' if dim == 3 else 'ux,uy'} "
+                         "or tx,ty[,tz]), numbers or expressions of position")
+    return [expression(s, option, dim) for s in items]
+
+
+def insitu_tensor(p, dim: int):
+    """S(x) (n, dim, dim): the in-situ total stress, compression positive,
+    from -thm_insitu_stress (one number: isotropic; six: sxx,syy,szz,syz,sxz,sxy;
+    in 2D the x-y block)."""
+    comps = p.insitu_stress.components
+    if len(comps) == 1:
+        comps = (comps[0],) * 3 + (0.0,) * 3
+
+    def S(points):
+        out = np.zeros((len(points), dim, dim))
+        for (i, j), c in zip(mt.VOIGT, comps, strict=True):
+            if i < dim and j < dim:
+                out[:, i, j] = out[:, j, i] = values_at(c, points)
+        return out
+    return S
+
+
+class DeckMonitor(Monitor):
+    """How far the deck has moved from its initial state: the largest
+    displacement (m) and the largest change of pm (Pa) and Tm (K) over the
+    nodes, per step (beside the field ranges of ``run.ranges``)."""
+
+    def __init__(self, fields, initial):
+        self.fields, self.initial = fields, initial
+        self.last = {}
+
+    def __call__(self, problem, t, X=None):
+        out = {}
+        if "u" in self.fields:
+            v = problem.field_values("u", X, t)
+            size = np.linalg.norm(v, axis=1) if len(v) else v[:, 0]
+            out["u_max"] = probes.global_max(problem.dm.comm, size, empty=0.0)
+        for name in ("pm", "Tm"):
+            if name in self.fields:
+                out[f"{name}_change_max"] = probes.max_nodal_error(problem, name, self.initial[name], X, t)
+        self.last = out
+        return out
+
+    def report(self, problem, t):
+        return {"change": dict(self.last)}
+
+
+class Reservoir(Scene):
+    """A deck: the module docstring."""
+    name = "reservoir"
+    description = "your own reservoir: a gmsh mesh with named groups and an options file (manual: decks)"
+    takes_expressions = True
+    parameters = (
+        mt.group("Rock", mt.ELASTIC + ("rock_biot_coefficient", "rock_porosity", "rock_permeability",
+                                       "rock_thermal_expansion") + mt.ROCK_HEAT),
+        mt.group("Fluid", mt.FLUID_HEAT + mt.FLUID_FLOW),
+        mt.group("Initial state", ("initial_temperature", "initial_pressure", "insitu_stress"),
+                 insitu_stress="0"),
+        mt.group("Gravity", ("gravity",), gravity=0.0),
+        mt.group("Coupling", ("thermomechanical_heating",)),
+        mt.group("Heat transport", mt.HEAT_DISCRETISATION),
+        DeckParams)
+    time = TimeDefaults(final_time=3.15576e7, dt_initial=8.64e4, dt_growth=1.2, dt_max=3.15576e7 / 12)
+    history_columns = ("u_max", "pm_change_max", "Tm_change_max")
+
+    def __init__(self, run, p):
+        super().__init__(run, p)
+        from petsc4py import PETSc
+        self.groups = deck_groups(run.mesh_file, PETSc.COMM_WORLD.tompi4py())
+        self.bc = {g.name: P.read_named(BoundaryValues(), BC_SUFFIXES, "bc", g.name)
+                   for g in self.groups.boundaries}
+
+    def parameter_sets(self):
+        """The run's and the deck's parameters, and the boundaries' values
+        (-thm_bc_NAME_*: a restart keeps them, as every physics option)."""
+        fields = []
+        for name, values in self.bc.items():
+            for f in dataclasses.fields(BoundaryValues):
+                option = P.named_option("bc", name, f.name)
+                fields.append((option, str, dataclasses.field(default=getattr(values, f.name),
+                                                              metadata={**f.metadata, "option": option})))
+        return (self.run, self.p, dataclasses.make_dataclass("Boundaries", fields, frozen=True)())
+
+    @classmethod
+    def named_options(cls, run):
+        from petsc4py import PETSc
+        check_not_yet()
+        groups = deck_groups(run.mesh_file, PETSc.COMM_WORLD.tompi4py())
+        unknown_boundary_options(groups)
+        return P.named_options(BoundaryValues, BC_SUFFIXES, "bc", [g.name for g in groups.boundaries])
+
+    @classmethod
+    def named_help(cls, mesh_file):
+        """The -thm_bc_NAME_* options of the mesh's boundaries (rank 0 alone: -help)."""
+        if not mesh_file:
+            return ("  Boundaries (give -thm_mesh_file F.msh to list them for its boundaries)\n" +
+                    P.help_text((BoundaryValues,)).split("\n", 1)[1].replace("-thm_", "-thm_bc_<NAME>_"))
+        groups = classify(mg.read_physical_names(mesh_file), mesh_file)
+        lines = []
+        for g in groups.boundaries:
+            lines.append(f"  Boundary {g.name} of {mesh_file}")
+            lines += [line.replace("-thm_", f"-thm_bc_{g.name.lower()}_", 1)
+                      for line in P.help_text((BoundaryValues,)).split("\n")[1:]]
+        lines.append(f"  Regions of {mesh_file}: {', '.join(g.name for g in groups.regions)}")
+        return "\n".join(lines)
+
+    # a sparse direct solve; the size rule puts the block preconditioner in its place on large decks
+    solver_defaults = staticmethod(direct_solver_defaults)
+
+    def mesh_dimension(self):
+        return self.groups.dim, ""
+
+    def water_temperatures(self):
+        """None before the mesh: a deck's temperatures are checked at the nodes (``check_water``)."""
+        return []
+
+    # -- the mesh ----------------------------------------------------------------------------
+    def label_mesh(self, dm) -> None:
+        """Boundary labels by name; every cell in a named region (before distribution)."""
+        self.check_regions(dm)
+        mg.label_named_boundaries(dm, self.groups.boundaries)
+
+    def check_regions(self, dm) -> None:
+        from mpi4py import MPI
+        comm = dm.comm.tompi4py()
+        start, end = dm.getHeightStratum(0)
+        tags = np.array([dm.getLabelValue(CELL_SETS, c) for c in range(start, end)] if
+                        dm.hasLabel(CELL_SETS) else [-1] * (end - start), dtype=int)
+        outside = int(np.count_nonzero(~np.isin(tags, [g.tag for g in self.groups.regions])))
+        outside = comm.allreduce(outside, op=MPI.SUM)
+        if outside:
+            raise InputError(f"mesh '{self.run.mesh_file}': {outside} cell(s) belong to no named region "
+                             f"(the regions: {', '.join(g.name for g in self.groups.regions)}); put every "
+                             f"cell in a physical group of dimension {self.groups.dim} with a name")
+
+    # -- the fields ------------------------------------------------------------------------------
+    def fields(self, dim: int) -> tuple[str, ...]:
+        p = self.p
+        has = ["u", "Tm"]
+        if np.any(p.permeability(dim) != 0):
+            has.append("pm")
+        if not p.fields:
+            return tuple(f for f in DECK_FIELDS if f in has)
+        wanted = [s.strip() for s in p.fields.split(",") if s.strip()]
+        for f in wanted:
+            if f not in DECK_FIELDS:
+                raise InputError(f"option -thm_fields = {p.fields}: '{f}' is not a field of a deck (rock "
+                                 f"only: {', '.join(DECK_FIELDS)}){did_you_mean(f, DECK_FIELDS)}")
+            if f not in has:
+                raise InputError(f"option -thm_fields = {p.fields}: pm needs a permeability that is not zero "
+                                 "(-thm_rock_permeability)")
+        return tuple(f for f in DECK_FIELDS if f in wanted)
+
+    def degrees(self, fields, degree: int) -> int:
+        """The degree of pm and Tm: P1 with P2 u (Taylor-Hood), else -thm_fe_degree."""
+        return 1 if "u" in fields and degree == 2 else degree
+
+    # -- the model ------------------------------------------------------------------------------
+    def build(self, mesh, degree):
+        p, dim = self.p, mesh.dim
+        fields = self.fields(dim)
+        fd = self.degrees(fields, degree)
+        T0 = self.initial_temperature(dim)
+        p0 = self.initial_pressure(dim)
+        bcs, facets = self.boundary_conditions(mesh, fields)
+        self.check_water(mesh, fields)
+        b = ModelBuilder(dataclasses.replace(p, initial_temperature=0.0, initial_pressure=0.0), dim)
+        g = np.zeros(dim)
+        g[-1] = -p.gravity
+        if "u" in fields:
+            self.check_held(bcs, dim)
+            self.check_equilibrium(mesh)
+            b.elasticity(degree, biot="pm" in fields, thermal="Tm" in fields, p_ref=p0, T_ref=T0)
+        if "pm" in fields:
+            b.matrix_flow(fd, permeability=p.permeability(dim), storage=p.storage,
+                          thermal_storage=p.rock_porosity * p.fluid_thermal_expansion, heat="Tm" in fields,
+                          gravity=tuple(p.fluid_density * g), reference_pressure=0.0,
+                          reference_temperature=CELSIUS)
+        if "Tm" in fields:
+            b.matrix_heat(fd)
+            b.model.ranges["Tm"] = self.temperature_range(mesh)
+        b.model.facets.extend(facets)
+        model = b.build()
+        init = {"u": lambda x: np.zeros((len(x), dim)), "pm": p0, "Tm": T0}
+        return Setup(model, bcs, self.scales(mesh, fields), {f: init[f] for f in fields},
+                     DeckMonitor(fields, init))
+
+    def initial_temperature(self, dim):
+        """T0(x) in kelvin at points (n, dim)."""
+        value = self.p.initial_temperature
+        return lambda x: values_at(value, x) + CELSIUS
+
+    def initial_pressure(self, dim):
+        value = self.p.initial_pressure
+        return lambda x: values_at(value, x)
+
+    # -- boundary conditions ------------------------------------------------------------------
+    def boundary_conditions(self, mesh, fields) -> tuple[list, list]:
+        """The Dirichlet conditions and the facet terms of the -thm_bc_NAME_* options."""
+        bcs, facets = [], []
+        for name, values in self.bc.items():
+            for suffix in BC_SUFFIXES:
+                text = getattr(values, suffix)
+                if not text:
+                    continue
+                option = f"-{P.named_option('bc', name, suffix)}"
+                field = BC_FIELD[suffix]
+                if field not in fields:
+                    raise InputError(f"option {option}: a condition on {field}, which this deck does not "
+                                     f"have (its fields: {', '.join(fields)})")
+                made = self.condition(mesh, name, suffix, text, option)
+                (bcs if isinstance(made, Dirichlet) else facets).append(made)
+        return bcs, facets
+
+    def condition(self, mesh, name, suffix, text, option):
+        """One boundary value: a Dirichlet condition or a facet term on boundary ``name``."""
+        dim, label = mesh.dim, name
+        if suffix == "displacement":
+            parts = vector_expressions(text, option, dim)
+            return Dirichlet("u", label, lambda x, t: np.stack([e(x) for e in parts], axis=1))
+        if suffix == "traction" or suffix == "normal_stress":
+            return self.load(label, suffix, text, option, dim)
+        e = expression(text, option, dim)
+        if suffix == "pressure":
+            return Dirichlet("pm", label, lambda x, t: e(x))
+        if suffix == "temperature":
+            return Dirichlet("Tm", label, lambda x, t: e(x) + CELSIUS)
+        if suffix == "normal_displacement":
+            axis, sign = self.face_axis(mesh, label, name, option)
+            return Dirichlet("u", label, lambda x, t: sign * e(x), components=(axis,))
+        kind = "pm" if suffix == "flux" else "Tm"
+        return FacetTerm(kind, label, lambda ctx: _at_facets(e, ctx)[..., None])
+
+    def load(self, label, suffix, text, option, dim):
+        """A total traction (or normal stress) on a boundary: the load on u,
+        the part beyond the in-situ traction -S n that the boundary already carries."""
+        S = insitu_tensor(self.p, dim)
+        if suffix == "traction":
+            parts = vector_expressions(text, option, dim)
+        else:
+            sigma_n = expression(text, option, dim)
+
+        def f0(ctx):
+            x = ctx.x.reshape(-1, dim)
+            n = np.broadcast_to(ctx.n, ctx.x.shape).reshape(-1, dim)
+            if suffix == "traction":
+                total = np.stack([e(x) for e in parts], axis=1)
+            else:
+                total = -sigma_n(x)[:, None] * n
+            load = total + np.einsum("nij,nj->ni", S(x), n)
+            return -load.reshape(ctx.x.shape)
+        return FacetTerm("u", label, f0)
+
+    def face_axis(self, mesh, label, name, option) -> tuple[int, float]:
+        """(axis, sign of the outward normal) of a plane boundary normal to an
+        axis; an input error for any other (collective)."""
+        cells, local, _ = mesh.boundary_facets(label)
+        n = mesh.outward_normals(cells, local) if len(cells) else np.zeros((0, mesh.dim))
+        lo, hi = corners(mesh.dm.comm, n, mesh.dim)
+        for axis in range(mesh.dim):
+            for sign in (1.0, -1.0):
+                if sign * lo[axis] > 1 - 1e-9 and sign * hi[axis] > 1 - 1e-9:
+                    return axis, sign
+        raise InputError(f"option {option}: boundary '{name}' is not a plane normal to the x, y or z axis; "
+                         f"give its displacement instead (-thm_bc_{name}_displacement)")
+
+    # -- checks of the deck -------------------------------------------------------------------
+    def check_held(self, bcs, dim) -> None:
+        """Mechanics needs conditions that hold the rock in place: each
+        displacement component held somewhere (rotations are not checked)."""
+        held = set()
+        for d in bcs:
+            if d.field == "u":
+                held |= set(range(dim)) if d.components is None else set(d.components)
+        free = [("x", "y", "z")[a] for a in range(dim) if a not in held]
+        if free:
+            raise InputError(f"the deck has u but nothing holds u_{','.join(free)}: the rock can move as a "
+                             "rigid body; give a boundary -thm_bc_NAME_displacement or _normal_displacement "
+                             f"(along {', '.join(free)})")
+
+    def check_equilibrium(self, mesh) -> None:
+        """The in-situ stress balances gravity: |div S + rho_b g e_z| (S
+        compression positive, e_z up) at every cell's centroid by central
+        differences, against -thm_equilibrium_tolerance (collective)."""
+        p, dim = self.p, mesh.dim
+        comm = mesh.dm.comm.tompi4py()
+        S = insitu_tensor(p, dim)
+        x = mesh.vertex_coords[mesh.cell_vertices].mean(axis=1) if mesh.ncells else np.zeros((0, dim))
+        extent = domain_extent(mesh)
+        delta = 1e-4 * extent
+        div = np.zeros((len(x), dim))
+        for j in range(dim):
+            step = np.zeros(dim)
+            step[j] = delta
+            div += (S(x + step)[:, :, j] - S(x - step)[:, :, j]) / (2 * delta)
+        rho_b = (1 - p.rock_porosity) * p.rock_density + p.rock_porosity * p.fluid_density
+        div[:, -1] += rho_b * p.gravity
+        largest = probes.global_max(comm, np.abs(S(x)), empty=0.0)
+        scale = rho_b * p.gravity if p.gravity > 0 else largest / extent
+        if scale == 0:
+            return
+        err = np.linalg.norm(div, axis=1) / scale
+        worst = float(err.max()) if len(err) else 0.0
+        top = probes.global_max(comm, worst)
+        if top <= p.equilibrium_tolerance:
+            return
+        mine = worst == top and len(err) > 0
+        where = None
+        if mine:
+            k = int(np.argmax(err))
+            cell = mesh.cstart + k
+            tag = mesh.dm.getLabelValue(CELL_SETS, cell) if mesh.dm.hasLabel(CELL_SETS) else -1
+            where = (self.groups.region_of_tag(tag), tuple(float(c) for c in x[k]))
+        where = next(w for w in comm.allgather(where) if w is not None)
+        point = ", ".join(f"{c:.6g}" for c in where[1])
+        raise InputError(f"option -thm_insitu_stress = {p.insitu_stress}: the in-situ stress does not "
+                         f"balance gravity (-thm_gravity = {p.gravity:g}): abs(div sigma0 + rho_b g) is "
+                         f"{top:.3g} times {'rho_b g' if p.gravity > 0 else 'its scale'} in region "
+                         f"{where[0]} at ({point}), above -thm_equilibrium_tolerance = "
+                         f"{p.equilibrium_tolerance:g}")
+
+    def check_water(self, mesh, fields) -> None:
+        """Every initial and boundary temperature is liquid water at the
+        initial pressure there, node by node (collective)."""
+        x = mesh.vertex_coords
+        given = [("thm_initial_temperature", values_at(self.p.initial_temperature, x), x)]
+        for name, bv in self.bc.items():
+            if bv.temperature:
+                option = P.named_option("bc", name, "temperature")
+                pts = mesh.point_coordinates(mesh.label_points(name, 0))
+                given.append((option, expression(bv.temperature, "-" + option, mesh.dim)(pts), pts))
+        message = None
+        for option, T, pts in given:
+            message = message or first_not_liquid(option, T, values_at(self.p.initial_pressure, pts), pts)
+        found = [m for m in mesh.dm.comm.tompi4py().allgather(message) if m]
+        if found:
+            raise InputError(found[0])
+
+    def temperature_range(self, mesh) -> Range:
+        """[lowest, highest] of the initial and boundary temperatures over the mesh's nodes (K)."""
+        x = mesh.vertex_coords
+        values = [values_at(self.p.initial_temperature, x)]
+        for name, bv in self.bc.items():
+            if bv.temperature:
+                pts = mesh.point_coordinates(mesh.label_points(name, 0))
+                values.append(expression(bv.temperature, f"-thm_bc_{name}_temperature", mesh.dim)(pts))
+        v = np.concatenate(values)
+        comm = mesh.dm.comm
+        return Range(probes.global_min(comm, v) + CELSIUS, probes.global_max(comm, v) + CELSIUS)
+
+    def scales(self, mesh, fields) -> dict:
+        """Unknown scales from the deck's own ranges: the spread of the
+        temperatures and pressures, the displacement they cause over the domain."""
+        p, comm = self.p, mesh.dm.comm
+        extent = domain_extent(mesh)
+        Tr = self.temperature_range(mesh)
+        dT = max(Tr.upper - Tr.lower, 1.0)
+        p0 = values_at(p.initial_pressure, mesh.vertex_coords)
+        plo, phi = probes.global_min(comm, p0), probes.global_max(comm, p0)
+        dp = max(phi - plo, p.fluid_density * p.gravity * extent, 1e5)
+        out = {"Tm": FieldScale(dT, 0.5 * (Tr.upper + Tr.lower)), "pm": FieldScale(dp, 0.5 * (plo + phi))}
+        strain = max(p.rock_thermal_expansion * dT / 3, p.rock_biot_coefficient * dp / p.bulk_modulus, 1e-6)
+        out["u"] = FieldScale(strain * extent)
+        return {f: out[f] for f in fields}
+
+
+def corners(comm, points, dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """(lowest, highest) coordinate along each axis of ``points`` (n, dim) over all ranks."""
+    lo = np.array([probes.global_min(comm, points[:, a]) for a in range(dim)])
+    hi = np.array([probes.global_max(comm, points[:, a]) for a in range(dim)])
+    return lo, hi
+
+
+def domain_extent(mesh) -> float:
+    """The mesh's largest extent along an axis (m, collective)."""
+    lo, hi = corners(mesh.dm.comm, mesh.vertex_coords, mesh.dim)
+    return float(np.max(hi - lo))
+
+
+def first_not_liquid(option: str, temps, p_gauge, points) -> str | None:
+    """The message of the first point where ``temps`` (degC) is not liquid water
+    at the gauge pressure ``p_gauge`` (Pa), or None.  The saturation
+    temperature grows with the pressure, so it is taken exactly only at the
+    points that a grid of pressures below theirs does not clear."""
+    from petthm.physics.fluid import ATMOSPHERE, check_liquid, liquid_range
+    if not len(temps):
+        return None
+    pa = np.asarray(p_gauge, dtype=float) + ATMOSPHERE
+    grid = np.geomspace(max(pa.min(), 611.3), max(pa.max(), 611.4), 64)
+    below = grid[np.clip(np.searchsorted(grid, pa, side="right") - 1, 0, len(grid) - 1)]
+    cleared = np.zeros(len(pa), dtype=bool)
+    for q in np.unique(below):
+        bounds = liquid_range(q)
+        if bounds is not None:
+            at = (below == q) & (pa >= q)
+            lowest, highest = bounds
+            cleared |= at & (temps > lowest) & (temps < highest)
+    for k in np.flatnonzero(~cleared):
+        try:
+            check_liquid(option, float(temps[k]), float(pa[k]),
+                         f"-thm_initial_pressure at ({', '.join(f'{c:.6g}' for c in points[k])}), gauge")
+        except InputError as e:
+            return str(e)
+    return None
+
+
+def _at_facets(e: Expression, ctx) -> np.ndarray:
+    x = ctx.x
+    return e(x.reshape(-1, x.shape[-1])).reshape(x.shape[:-1])
+

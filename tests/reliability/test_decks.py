@@ -1,0 +1,127 @@
+"""A bad deck gets one line naming the option or group and what the mesh has
+(docs/user-guide/reliability.md, "Decks"; ../shared/docs/reservoir.md)."""
+import pytest
+
+from conftest import run_petthm
+from petthm.mesh.generate import layered_deck_box
+
+HOLD = [a for face in ("bottom", "west", "east", "south", "north")
+        for a in (f"-thm_bc_{face}_normal_displacement", 0)]
+
+
+@pytest.fixture(scope="module")
+def box(tmp_path_factory):
+    d = tmp_path_factory.mktemp("deckbox")
+    return layered_deck_box(str(d / "box.msh"), [0, 0, -300], [300, 300, 0], 150,
+                            [("granite", -150.0), ("sandstone", 0.0)])
+
+
+@pytest.fixture(scope="module")
+def square(tmp_path_factory):
+    return layered_deck_box(str(tmp_path_factory.mktemp("decksq") / "sq.msh"), [0, -300], [300, 0], 100)
+
+
+def _error(tmp_path, *options):
+    proc, _ = run_petthm("reservoir", tmp_path, *options, check=False)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and lines[0].startswith("petthm: error: "), proc.stderr
+    return lines[0]
+
+
+@pytest.mark.parametrize("options,words", [
+    ((), ("needs -thm_mesh_file",)),
+    (("-thm_bc_tpo_pressure", 0), ("-thm_bc_tpo_pressure", "no boundary 'tpo'", "did you mean top?",
+                                   "west, east, south, north, bottom, top")),
+    (("-thm_bc_top_presure", 0), ("-thm_bc_top_presure", "did you mean pressure?")),
+    (("-thm_region_granite_rock_youngs_modulus", 1e10), ("per-region rock properties", "not part of")),
+    (("-thm_wells", "inj"), ("-thm_wells", "wells are not part")),
+    (("-thm_bc_top_pressure", "(-z)*rho"), ("-thm_bc_top_pressure", "the name 'rho'", "accepted")),
+    (("-thm_initial_temperature", "20+__import__(1)"), ("-thm_initial_temperature", "__import__",
+                                                        "not accepted")),
+    (("-thm_fields", "u,pf"), ("-thm_fields", "'pf' is not a field of a deck")),
+    (("-thm_fields", "Tm", "-thm_bc_top_pressure", 0), ("-thm_bc_top_pressure", "a condition on pm",
+                                                         "its fields: Tm")),
+    (("-thm_fields", "u,Tm"), ("nothing holds u_x,y,z", "rigid body")),
+    (("-thm_bc_bottom_normal_displacement", 0, "-thm_bc_west_normal_displacement", 0),
+     ("nothing holds u_y",)),
+    (("-thm_initial_temperature", "20+(-z)*0.5", *HOLD), ("-thm_initial_temperature", "170 degC",
+                                                          "is not liquid water", "boiling")),
+    (("-thm_gravity", 9.81, *HOLD), ("-thm_insitu_stress = 0", "does not balance gravity",
+                                     "region granite")),
+    (("-thm_rock_permeability", "1e-14,2e-14,3e-14,4e-14"), ("-thm_rock_permeability", "1, 3 or 6 values")),
+])
+def test_a_bad_deck_is_one_line_naming_what_is_wrong(tmp_path, box, options, words):
+    first = () if options == () else ("-thm_mesh_file", box)
+    msg = _error(tmp_path, *first, *options)
+    assert all(w in msg for w in words), msg
+
+
+def test_z_in_a_2d_deck_is_an_unknown_symbol(tmp_path, square):
+    msg = _error(tmp_path, "-thm_mesh_file", square, "-thm_fields", "Tm",
+                 "-thm_initial_temperature", "20+(-z)")
+    assert "-thm_initial_temperature" in msg and "the name 'z'" in msg
+
+
+def test_a_cell_in_no_region_is_an_error(tmp_path):
+    gmsh = pytest.importorskip("gmsh")
+    path = str(tmp_path / "part.msh")
+    gmsh.initialize(["-v", "0"])
+    try:
+        a = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        gmsh.model.occ.addBox(1, 0, 0, 1, 1, 1)
+        gmsh.model.occ.removeAllDuplicates()
+        gmsh.model.occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [a], 1, name="left")
+        gmsh.option.setNumber("Mesh.SaveAll", 1)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(path)
+    finally:
+        gmsh.finalize()
+    msg = _error(tmp_path / "run", "-thm_mesh_file", path)
+    assert "belong to no named region" in msg and "left" in msg
+
+
+def test_a_normal_displacement_on_a_face_off_the_axes_is_an_error(tmp_path):
+    mesh = layered_deck_box(str(tmp_path / "turned.msh"), [0, 0, -300], [300, 300, 0], 150, rotation=20.0)
+    msg = _error(tmp_path / "run", "-thm_mesh_file", mesh, *HOLD)
+    assert "boundary 'west' is not a plane normal" in msg and "-thm_bc_west_displacement" in msg
+
+
+def test_a_restart_keeps_the_boundary_values(tmp_path, box):
+    """-thm_bc_NAME_* are physics options: a restart that changes one is
+    refused naming it; the same values continue the run."""
+    opts = ("-thm_mesh_file", box, "-thm_fields", "Tm", "-thm_initial_temperature", 80,
+            "-thm_bc_top_temperature", 20, "-thm_final_time", 1e7)
+    _, s = run_petthm("reservoir", tmp_path, *opts, "-ts_max_steps", 2, check=False)
+    assert s["status"] == "stopped" and s["provenance"]["parameters"]["-thm_bc_top_temperature"] == "20"
+    proc, _ = run_petthm("reservoir", tmp_path, *opts[:-4], "-thm_bc_top_temperature", 30, "-thm_final_time",
+                         1e7, "-thm_restart", tmp_path, check=False)
+    assert "-thm_bc_top_temperature" in proc.stderr and "differ" in proc.stderr, proc.stderr
+    _, s = run_petthm("reservoir", tmp_path, *opts, "-thm_restart", tmp_path)
+    assert s["status"] == "completed"
+
+
+def test_the_geometry_tool_writes_a_mesh_and_a_starter_deck(tmp_path):
+    """python -m petthm.run.deckbox: the mesh and an options file naming it;
+    with a boundary value filled in, the deck runs."""
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    def tool(*args):
+        return subprocess.run([sys.executable, "-m", "petthm.run.deckbox", *args], cwd=ROOT,
+                              capture_output=True, text=True)
+    out = tmp_path / "res.msh"
+    proc = tool("--lower", "0,-300", "--upper", "300,0", "--size", "100",
+                "--layers", "granite:-150,sandstone:0", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    opts = (tmp_path / "res.opts").read_text()
+    assert f"-thm_mesh_file {out}" in opts and "# -thm_bc_top_temperature VALUE" in opts
+    _, s = run_petthm("reservoir", tmp_path / "run", "-options_file", tmp_path / "res.opts",
+                      "-thm_gravity", 0, "-thm_fields", "Tm", "-thm_bc_top_temperature", 10,
+                      "-ts_max_steps", 2, check=False)
+    assert s["status"] == "stopped" and s["change"]["Tm_change_max"] > 0
+    bad = tool("--lower", "0,0", "--upper", "1,1,1", "--size", "1", "--out", str(tmp_path / "x.msh"))
+    assert bad.returncode == 2 and bad.stderr.startswith("petthm: error: --lower and --upper")

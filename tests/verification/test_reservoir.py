@@ -1,0 +1,151 @@
+"""The reservoir scene: decks on gmsh meshes with named groups, each against
+an exact result (manual: user guide, decks; ../shared/docs/reservoir.md)."""
+import numpy as np
+import pytest
+
+from conftest import run_petthm
+from petthm.io.output import read_output
+from petthm.mesh.generate import layered_deck_box
+
+RHO_G = 1000.0 * 9.81            # the default water's rho_f g (Pa/m)
+
+
+def column_meshes(folder) -> dict:
+    """2D and 3D columns 1000 m deep of two named layers (granite below, sandstone above)."""
+    layers = [("granite", -500.0), ("sandstone", 0.0)]
+    return {2: layered_deck_box(str(folder / "col2.msh"), [0, -1000], [200, 0], 125, layers),
+            3: layered_deck_box(str(folder / "col3.msh"), [0, 0, -1000], [200, 200, 0], 250, layers)}
+
+
+@pytest.fixture(scope="module")
+def meshes(tmp_path_factory):
+    return column_meshes(tmp_path_factory.mktemp("decks"))
+
+
+def final(outdir, name):
+    """(node coordinates, values) of a field at the last output (its own degree's nodes)."""
+    x, _, _, fields = read_output(str(outdir / "fields.h5"))
+    return x, fields[name]
+
+
+STEADY = ("-thm_dt_initial", 1e8, "-thm_final_time", 2e9, "-thm_dt_max", 1e9)
+HOLD = tuple(a for face in ("bottom", "west", "east", "south", "north")
+             for a in (f"-thm_bc_{face}_normal_displacement", 0))
+
+
+def hydrostatic_error(outdir, mesh, dim, degree) -> float:
+    """From p0 = 0 with the top held at 0, under gravity: the largest
+    |p - rho_f g depth| at the end, relative to rho_f g H (H = 1000 m)."""
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "pm", "-thm_gravity", 9.81,
+                      "-thm_fe_degree", degree, "-thm_bc_top_pressure", 0, *STEADY)
+    assert s["status"] == "completed"
+    x, p = final(outdir, "pm")
+    return float(np.max(np.abs(p.ravel() - RHO_G * -x[:, dim - 1]))) / (RHO_G * 1000)
+
+
+def flux_errors(outdir, mesh) -> tuple[float, float]:
+    """No gravity: water enters through the bottom at 1e-8 m/s (an outward
+    flux of -1e-8) with the top at p = 0, so p = -1e3 z (k = 1e-14, mu =
+    1e-3); heat enters at 0.09 W/m2 with the top at 20 degC, so T = 20 -
+    0.09 z / 3 (the water's heat capacity made negligible): the largest
+    errors relative to 1 MPa and 30 K."""
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "pm,Tm",
+                      "-thm_fluid_heat_capacity", 1e-9, "-thm_rock_conductivity", 3.0,
+                      "-thm_fluid_conductivity", 3.0,
+                      "-thm_bc_top_pressure", 0, "-thm_bc_bottom_flux", -1e-8, "-thm_initial_temperature", 20,
+                      "-thm_bc_top_temperature", 20, "-thm_bc_bottom_heat_flux", -0.09, *STEADY,
+                      "-thm_final_time", 1e14, "-thm_dt_max", 1e13)
+    assert s["status"] == "completed"
+    x, p = final(outdir, "pm")
+    _, T = final(outdir, "Tm")
+    return (float(np.max(np.abs(p.ravel() - (-1e3 * x[:, 2])))) / 1e6,
+            float(np.max(np.abs(T.ravel() - (20 - 0.03 * x[:, 2])))) / 30)
+
+
+def at_rest_options(mesh, stress):
+    """Hydrostatic water, a geotherm between held temperatures and
+    ``stress`` times the lithostatic stress, under gravity."""
+    rho_b = 0.95 * 2650 + 0.05 * 1000
+    s = f"(-z)*{stress * rho_b * 9.81!r}"
+    return ("-thm_mesh_file", mesh, "-thm_gravity", 9.81, "-thm_rock_porosity", 0.05,
+            "-thm_initial_pressure", f"(-z)*{RHO_G!r}", "-thm_initial_temperature", "20+(-z)*0.03",
+            "-thm_insitu_stress", f"{s},{s},{s},0,0,0",
+            "-thm_bc_top_temperature", 20, "-thm_bc_bottom_temperature", 50, "-thm_bc_top_pressure", 0,
+            *HOLD, "-thm_final_time", 3e8)
+
+
+def at_rest_changes(outdir, mesh, degree) -> dict:
+    _, s = run_petthm("reservoir", outdir, *at_rest_options(mesh, 1.0), "-thm_fe_degree", degree)
+    assert s["status"] == "completed"
+    return s["change"]
+
+
+def turned_error(outdir, dim) -> float:
+    """An anisotropic permeability: the box turned by 30 degrees with its
+    tensor turned alike (off-diagonal terms) against the upright box's
+    linear pressure between its west and east faces, relative to the drop."""
+    k = np.diag([4e-14, 1e-14, 2e-14][:dim])
+    c, s_ = np.cos(np.radians(30)), np.sin(np.radians(30))
+    R = np.eye(dim)
+    R[:2, :2] = [[c, -s_], [s_, c]]
+    K = R @ k @ R.T
+    parts = (K[0, 0], K[1, 1], K[2, 2], K[1, 2], K[0, 2], K[0, 1]) if dim == 3 else \
+        (K[0, 0], K[1, 1], K[0, 1])
+    outdir.mkdir(parents=True, exist_ok=True)
+    mesh = layered_deck_box(str(outdir / "turned.msh"), [0.0] * dim, [300.0, 200.0, 100.0][:dim], 60.0,
+                            rotation=30.0)
+    _, s = run_petthm("reservoir", outdir / "run", "-thm_mesh_file", mesh, "-thm_fields", "pm",
+                      "-thm_rock_permeability", ",".join(f"{v!r}" for v in parts),
+                      "-thm_bc_west_pressure", 3e6, "-thm_bc_east_pressure", 0, *STEADY)
+    assert s["status"] == "completed"
+    x, p = final(outdir / "run", "pm")
+    upright = x @ R                       # the turned points turned back
+    return float(np.max(np.abs(p.ravel() - 3e6 * (1 - upright[:, 0] / 300.0)))) / 3e6
+
+
+def ranks_changes(outdir, mesh) -> tuple[dict, dict]:
+    """A coupled deck (u, pm, Tm) cooled from the top, on 1 and 2 ranks."""
+    opts = ("-thm_mesh_file", mesh, "-thm_initial_temperature", 80, "-thm_bc_top_temperature", 20,
+            "-thm_bc_top_pressure", 0, "-thm_rock_porosity", 0.1, "-thm_final_time", 3e7, *HOLD)
+    _, s1 = run_petthm("reservoir", outdir / "one", *opts)
+    _, s2 = run_petthm("reservoir", outdir / "two", *opts, ranks=2)
+    return s1["change"], s2["change"]
+
+
+@pytest.mark.parametrize("dim,degree", [(2, 1), (2, 2), (3, 1)])
+def test_pressure_under_gravity_becomes_hydrostatic(tmp_path, meshes, dim, degree):
+    """p = rho_f g depth is linear, so exact for P1 and P2 in steady state:
+    the flow law carries rho_f g (without it p would stay 0)."""
+    assert hydrostatic_error(tmp_path, meshes[dim], dim, degree) < 1e-8
+
+
+def test_a_flux_and_a_heat_flux_drive_the_exact_linear_profiles(tmp_path, meshes):
+    ep, eT = flux_errors(tmp_path, meshes[3])
+    assert ep < 1e-6 and eT < 1e-6
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_a_deck_in_equilibrium_stays_at_rest(tmp_path, meshes, degree):
+    """Nothing moves, to round-off (the refusal below is the negative control)."""
+    change = at_rest_changes(tmp_path, meshes[3], degree)
+    assert change["u_max"] < 1e-12
+    assert change["pm_change_max"] < 1e-12 * RHO_G * 1000
+    assert change["Tm_change_max"] < 1e-12 * 30
+
+
+def test_a_stress_that_does_not_balance_gravity_is_refused(tmp_path, meshes):
+    proc, _ = run_petthm("reservoir", tmp_path, *at_rest_options(meshes[3], 1.01), check=False)
+    msg = proc.stderr.strip().splitlines()[-1]
+    assert msg.startswith("petthm: error: option -thm_insitu_stress") and "0.01 times rho_b g" in msg
+    assert "region" in msg and "-thm_equilibrium_tolerance" in msg
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_turned_deck_with_the_turned_permeability_equals_the_upright_one(tmp_path, dim):
+    assert turned_error(tmp_path, dim) < 1e-8
+
+
+def test_one_rank_equals_two(tmp_path, meshes):
+    one, two = ranks_changes(tmp_path, meshes[3])
+    for key in ("u_max", "pm_change_max", "Tm_change_max"):
+        assert two[key] == pytest.approx(one[key], rel=1e-8), key
