@@ -30,6 +30,9 @@ def main() -> None:
     ep, eT = decks.flux_errors(out / "flux", meshes[3])
     rows += [("flux and heat flux, 3D P1", "max abs(p - exact) / 1 MPa", ep),
              ("flux and heat flux, 3D P1", "max abs(T - exact) / 30 K", eT)]
+    for how in ("normal_stress", "traction"):
+        rows.append((f"column loaded at the top by a total {how}, 3D P1", "abs(u_max - exact) / exact",
+                     decks.top_load_error(out / f"load_{how}", meshes[3], how)))
     for degree in (1, 2):
         change = decks.at_rest_changes(out / f"rest_p{degree}", meshes[3], degree)
         rows += [(f"deck at rest, P{degree} u", key, change[key])

@@ -149,3 +149,31 @@ def test_one_rank_equals_two(tmp_path, meshes):
     one, two = ranks_changes(tmp_path, meshes[3])
     for key in ("u_max", "pm_change_max", "Tm_change_max"):
         assert two[key] == pytest.approx(one[key], rel=1e-8), key
+
+
+def top_load_error(outdir, mesh, how: str) -> float:
+    """A column under an isotropic in-situ stress of 20 MPa (no gravity),
+    on rollers, its top loaded to 21 MPa total (``how``: normal_stress, or
+    the traction 0,0,-21e6), its bottom held by ``_displacement 0,0,0``:
+    uniaxial strain, so the top settles by 1 MPa H / (lambda + 2G), which P1
+    holds exactly (the displacement is linear).  The largest displacement's
+    error relative to it."""
+    load = ("-thm_bc_top_normal_stress", 21e6) if how == "normal_stress" else \
+        ("-thm_bc_top_traction", "0,0,-21e6")
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "u", "-thm_fe_degree", 1,
+                      "-thm_insitu_stress", 20e6, *load, "-thm_bc_bottom_displacement", "0,0,0",
+                      *[a for face in ("west", "east", "south", "north")
+                        for a in (f"-thm_bc_{face}_normal_displacement", 0)],
+                      "-thm_dt_initial", 1, "-thm_final_time", 1)
+    assert s["status"] == "completed"
+    E, nu = 37.5e9, 0.25                 # the default rock
+    constrained = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    exact = 1e6 * 1000 / constrained
+    return abs(s["change"]["u_max"] - exact) / exact
+
+
+@pytest.mark.parametrize("how", ["normal_stress", "traction"])
+def test_a_total_load_on_the_top_settles_the_column_by_its_excess(tmp_path, meshes, how):
+    """The loads are totals: the in-situ traction is taken off (without
+    that the column would settle by 21 MPa H / M, 21 times too far)."""
+    assert top_load_error(tmp_path, meshes[3], how) < 1e-10
