@@ -298,13 +298,12 @@ class Reservoir(Scene):
         mg.label_named_boundaries(dm, self.groups.boundaries)
 
     def check_regions(self, dm) -> None:
+        """Every cell carries the tag of a named region in the "Cell Sets" label (collective)."""
         from mpi4py import MPI
-        comm = dm.comm.tompi4py()
         start, end = dm.getHeightStratum(0)
-        tags = np.array([dm.getLabelValue(CELL_SETS, c) for c in range(start, end)] if
-                        dm.hasLabel(CELL_SETS) else [-1] * (end - start), dtype=int)
-        outside = int(np.count_nonzero(~np.isin(tags, [g.tag for g in self.groups.regions])))
-        outside = comm.allreduce(outside, op=MPI.SUM)
+        inside = sum(dm.getStratumSize(CELL_SETS, g.tag) for g in self.groups.regions) \
+            if dm.hasLabel(CELL_SETS) else 0
+        outside = dm.comm.tompi4py().allreduce(end - start - inside, op=MPI.SUM)
         if outside:
             raise InputError(f"mesh '{self.run.mesh_file}': {outside} cell(s) belong to no named region "
                              f"(the regions: {', '.join(g.name for g in self.groups.regions)}); put every "
@@ -312,6 +311,7 @@ class Reservoir(Scene):
 
     # -- the fields ------------------------------------------------------------------------------
     def fields(self, dim: int) -> tuple[str, ...]:
+        """The deck's fields in canonical order: -thm_fields, else every field it has."""
         p = self.p
         has = ["u", "Tm"]
         if np.any(p.permeability(dim) != 0):
@@ -337,8 +337,7 @@ class Reservoir(Scene):
         p, dim = self.p, mesh.dim
         fields = self.fields(dim)
         fd = self.degrees(fields, degree)
-        T0 = self.initial_temperature(dim)
-        p0 = self.initial_pressure(dim)
+        T0, p0 = self.initial_temperature(), self.initial_pressure()
         bcs, facets = self.boundary_conditions(mesh, fields)
         self.check_water(mesh, fields)
         b = ModelBuilder(dataclasses.replace(p, initial_temperature=0.0, initial_pressure=0.0), dim)
@@ -362,12 +361,13 @@ class Reservoir(Scene):
         return Setup(model, bcs, self.scales(mesh, fields), {f: init[f] for f in fields},
                      DeckMonitor(fields, init))
 
-    def initial_temperature(self, dim):
-        """T0(x) in kelvin at points (n, dim)."""
+    def initial_temperature(self):
+        """T0(x) in kelvin at points (n, d)."""
         value = self.p.initial_temperature
         return lambda x: values_at(value, x) + CELSIUS
 
-    def initial_pressure(self, dim):
+    def initial_pressure(self):
+        """p0(x) in Pa (gauge) at points (n, d)."""
         value = self.p.initial_pressure
         return lambda x: values_at(value, x)
 
