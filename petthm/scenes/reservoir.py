@@ -61,6 +61,8 @@ class DeckParams:
     fields: str = param("", "-", "the fields to solve for, a comma list of u, pm, Tm (default: every field "
                         "the deck has: u, Tm, and pm where the permeability is not zero)",
                         kind=DISCRETISATION)
+    fe_degree_flow: int = param(0, "-", "degree of pm and Tm (0: P1 with P2 u, else -thm_fe_degree)",
+                                choices=(0, 1, 2), kind=DISCRETISATION)
     equilibrium_tolerance: float = param(1e-6, "-", "the largest imbalance div sigma0 + rho_b g of the "
                                          "in-situ stress accepted, relative to rho_b g (without gravity: "
                                          "to the stress's largest value over the domain's extent)",
@@ -329,7 +331,10 @@ class Reservoir(Scene):
         return tuple(f for f in DECK_FIELDS if f in wanted)
 
     def degrees(self, fields, degree: int) -> int:
-        """The degree of pm and Tm: P1 with P2 u (Taylor-Hood), else -thm_fe_degree."""
+        """The degree of pm and Tm: -thm_fe_degree_flow, else P1 with P2 u
+        (Taylor-Hood), else -thm_fe_degree."""
+        if self.p.fe_degree_flow:
+            return self.p.fe_degree_flow
         return 1 if "u" in fields and degree == 2 else degree
 
     # -- the model ------------------------------------------------------------------------------

@@ -177,3 +177,15 @@ def test_a_total_load_on_the_top_settles_the_column_by_its_excess(tmp_path, mesh
     """The loads are totals: the in-situ traction is taken off (without
     that the column would settle by 21 MPa H / M, 21 times too far)."""
     assert top_load_error(tmp_path, meshes[3], how) < 1e-10
+
+
+@pytest.mark.parametrize("option,flow_file", [((), "fields_p1.h5"),
+                                              (("-thm_fe_degree_flow", 2), "fields.h5")])
+def test_the_flow_degree_is_p1_beside_p2_u_unless_set(tmp_path, meshes, option, flow_file):
+    """Taylor-Hood by default (P2 u, P1 pm and Tm: written with the P1
+    fields); -thm_fe_degree_flow 2 gives P2 pm and Tm (with u's)."""
+    _, s = run_petthm("reservoir", tmp_path, *at_rest_options(meshes[3], 1.0), "-thm_fe_degree", 2, *option,
+                      "-ts_max_steps", 1, "-thm_heat_transport", "supg", check=False)
+    assert s["status"] == "stopped"
+    fields = read_output(str(tmp_path / flow_file))[3]
+    assert "pm" in fields and "Tm" in fields and ("u" in fields) == (flow_file == "fields.h5")
