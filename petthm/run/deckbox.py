@@ -3,7 +3,7 @@
     python -m petthm.run.deckbox --lower 0,0,-3000 --upper 2000,2000,-1000 --size 200 \\
         --layers granite:-2000,sandstone:-1000 --out reservoir.msh
 
-writes the mesh (``generate.layered_deck_box``: named layers, faces west,
+writes the mesh (``deckmesh.layered_deck_box``: named layers, faces west,
 east, south, north, bottom, top) and beside it a starter options file
 (``reservoir.opts``) that names the mesh and lists every option of its
 boundaries, commented out, for the user to fill in.
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", required=True,
                     help="the mesh file to write (.msh); the options beside it (.opts)")
     args = ap.parse_args(argv)
-    from petthm.mesh.generate import FACE_NAMES_2D, FACE_NAMES_3D, layered_deck_box
+    from petthm.mesh.deckmesh import FACE_NAMES_2D, FACE_NAMES_3D, layered_deck_box
     try:
         lower, upper = _numbers(args.lower, "--lower"), _numbers(args.upper, "--upper")
         if len(lower) != len(upper) or len(lower) not in (2, 3):

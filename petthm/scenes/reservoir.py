@@ -28,7 +28,6 @@ yet: their options are refused with an error that says so.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -38,165 +37,31 @@ from petthm.discretisation.assembly import FieldScale
 from petthm.discretisation.constraints import Dirichlet
 from petthm.discretisation.model import FacetTerm, Range
 from petthm.errors import InputError
-from petthm.expressions import Expression, split_list, values_at
+from petthm.expressions import Expression, values_at
 from petthm.mesh import groups as mg
-from petthm.params import CELSIUS, DISCRETISATION, PHYSICS, param
+from petthm.params import CELSIUS
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults
+from petthm.scenes.deckinput import (
+    BC_FIELD,
+    BC_SUFFIXES,
+    CELL_SETS,
+    DECK_FIELDS,
+    BoundaryValues,
+    DeckParams,
+    check_not_yet,
+    classify,
+    corners,
+    deck_groups,
+    did_you_mean,
+    domain_extent,
+    first_not_liquid,
+    insitu_tensor,
+    unknown_boundary_options,
+    vector_expressions,
+)
 from petthm.solvers.options import direct_solver_defaults
-
-#: the fields a deck may have (rock only)
-DECK_FIELDS = ("u", "pm", "Tm")
-#: the cell label PETSc's gmsh reader makes from the physical groups of the cells
-CELL_SETS = "Cell Sets"
-#: what a deck cannot hold yet: the option prefixes and what they would set
-NOT_YET = {"thm_region_": "per-region rock properties", "thm_fracture_": "fractures",
-           "thm_fractures": "fractures", "thm_well_": "wells", "thm_wells": "wells"}
-
-
-@dataclass(frozen=True)
-class DeckParams:
-    """Deck (reservoir)"""
-    fields: str = param("", "-", "the fields to solve for, a comma list of u, pm, Tm (default: every field "
-                        "the deck has: u, Tm, and pm where the permeability is not zero)",
-                        kind=DISCRETISATION)
-    fe_degree_flow: int = param(0, "-", "degree of pm and Tm (0: P1 with P2 u, else -thm_fe_degree)",
-                                choices=(0, 1, 2), kind=DISCRETISATION)
-    equilibrium_tolerance: float = param(1e-6, "-", "the largest imbalance div sigma0 + rho_b g of the "
-                                         "in-situ stress accepted, relative to rho_b g (without gravity: "
-                                         "to the stress's largest value over the domain's extent)",
-                                         lo=0.0, lo_open=True, kind=PHYSICS)
-
-
-@dataclass(frozen=True)
-class BoundaryValues:
-    """The conditions on one named boundary: ``-thm_bc_NAME_SUFFIX``, read by
-    ``params.read_named`` (kind ``bc``); numbers or expressions of x, y, z."""
-    pressure: str = param("", "Pa", "pressure held on the boundary", kind=PHYSICS)
-    temperature: str = param("", "degC", "temperature held on the boundary", kind=PHYSICS)
-    flux: str = param("", "m/s", "water flux out through the boundary (Darcy velocity . n)", kind=PHYSICS)
-    heat_flux: str = param("", "W/m2", "conductive heat flux out through the boundary", kind=PHYSICS)
-    normal_displacement: str = param("", "m", "displacement along the outward normal (a plane face normal "
-                                     "to an axis)", kind=PHYSICS)
-    displacement: str = param("", "m", "displacement ux,uy[,uz]", kind=PHYSICS)
-    normal_stress: str = param("", "Pa", "total normal stress on the boundary, compression positive",
-                               kind=PHYSICS)
-    traction: str = param("", "Pa", "total traction tx,ty[,tz] on the boundary", kind=PHYSICS)
-
-
-#: the field each boundary value acts on
-BC_FIELD = {"pressure": "pm", "temperature": "Tm", "flux": "pm", "heat_flux": "Tm",
-            "normal_displacement": "u", "displacement": "u", "normal_stress": "u", "traction": "u"}
-BC_SUFFIXES = tuple(f.name for f in dataclasses.fields(BoundaryValues))
-
-
-# -- the mesh's names -----------------------------------------------------------------------
-@dataclass(frozen=True)
-class DeckGroups:
-    """The named groups of a deck's mesh: its dimension, regions and boundaries."""
-    dim: int
-    regions: tuple
-    boundaries: tuple
-
-    def region_of_tag(self, tag: int) -> str:
-        return next((g.name for g in self.regions if g.tag == tag), f"tag {tag}")
-
-
-def deck_groups(path: str, comm) -> DeckGroups:
-    """Read and classify the named groups of the deck's mesh (collective)."""
-    if not path:
-        raise InputError("scene reservoir needs -thm_mesh_file F.msh: a gmsh mesh whose physical groups name "
-                         "the rock's regions and boundaries (manual: user guide, decks)")
-    if not path.endswith(".msh"):
-        raise InputError(f"option -thm_mesh_file = {path}: a deck's mesh is a gmsh .msh file (2.2 or 4.1)")
-    return classify(mg.named_groups(path, comm), path)
-
-
-def classify(groups, path: str) -> DeckGroups:
-    """The regions (the groups of the largest dimension) and boundaries (one
-    dimension less) among a mesh's named groups, their names checked."""
-    if not groups:
-        raise InputError(f"option -thm_mesh_file = {path}: the mesh has no named physical groups; a deck "
-                         "refers to its regions and boundaries by name")
-    dim = max(g.dim for g in groups)
-    if dim not in (2, 3):
-        raise InputError(f"option -thm_mesh_file = {path}: its largest named group has dimension {dim}; a "
-                         "deck's regions are groups of dimension 2 (plane strain) or 3")
-    regions = tuple(g for g in groups if g.dim == dim)
-    boundaries = tuple(g for g in groups if g.dim == dim - 1)
-    kinds = {g.name: "region" for g in regions} | {g.name: "bc" for g in boundaries}
-    mg.check_names(regions + boundaries, kinds=kinds)
-    return DeckGroups(dim, regions, boundaries)
-
-
-def did_you_mean(word: str, names) -> str:
-    import difflib
-    close = difflib.get_close_matches(word.lower(), [n.lower() for n in names], n=1)
-    return f" (did you mean {close[0]}?)" if close else ""
-
-
-def check_not_yet(options=None) -> None:
-    """An input error for the options of what a deck cannot hold yet (``NOT_YET``)."""
-    from petsc4py import PETSc
-    opts = options or PETSc.Options()
-    for key in sorted(opts.getAll()):
-        low = key.lower()
-        for prefix, what in NOT_YET.items():
-            if low.startswith(prefix):
-                raise InputError(f"option -{key}: {what} are not part of a reservoir deck yet (the rock "
-                                 "takes the global -thm_rock_* values; fractures and wells: the paper's "
-                                 "scenes)")
-
-
-def unknown_boundary_options(groups: DeckGroups, options=None) -> None:
-    """An input error for a -thm_bc_NAME_* option whose NAME is not a boundary of the mesh."""
-    from petsc4py import PETSc
-    opts = options or PETSc.Options()
-    names = [g.name for g in groups.boundaries]
-    known = {n.lower() for n in names}
-    for key in sorted(opts.getAll()):
-        low = key.lower()
-        if not low.startswith("thm_bc_"):
-            continue
-        name = low[len("thm_bc_"):].split("_")[0]
-        if name not in known:
-            raise InputError(f"option -{key}: the mesh has no boundary '{name}'{did_you_mean(name, names)}; "
-                             f"its boundaries: {', '.join(names) or 'none'}")
-        suffix = low[len("thm_bc_") + len(name) + 1:]
-        if suffix not in BC_SUFFIXES:
-            raise InputError(f"option -{key}: a boundary takes {', '.join(BC_SUFFIXES)}"
-                             f"{did_you_mean(suffix, BC_SUFFIXES)}")
-
-
-# -- values of position ---------------------------------------------------------------------
-def expression(text: str, option: str, dim: int) -> Expression:
-    return Expression(text, option, dim)
-
-
-def vector_expressions(text: str, option: str, dim: int) -> list[Expression]:
-    items = split_list(text)
-    if len(items) != dim:
-        raise InputError(f"option {option} = {text}: {dim} components ({'ux,uy,uz' if dim == 3 else 'ux,uy'} "
-                         "or tx,ty[,tz]), numbers or expressions of position")
-    return [expression(s, option, dim) for s in items]
-
-
-def insitu_tensor(p, dim: int):
-    """S(x) (n, dim, dim): the in-situ total stress, compression positive,
-    from -thm_insitu_stress (one number: isotropic; six: sxx,syy,szz,syz,sxz,sxy;
-    in 2D the x-y block)."""
-    comps = p.insitu_stress.components
-    if len(comps) == 1:
-        comps = (comps[0],) * 3 + (0.0,) * 3
-
-    def S(points):
-        out = np.zeros((len(points), dim, dim))
-        for (i, j), c in zip(mt.VOIGT, comps, strict=True):
-            if i < dim and j < dim:
-                out[:, i, j] = out[:, j, i] = values_at(c, points)
-        return out
-    return S
 
 
 class DeckMonitor(Monitor):
@@ -357,13 +222,14 @@ class Reservoir(Scene):
                           thermal_storage=p.rock_porosity * p.fluid_thermal_expansion, heat="Tm" in fields,
                           gravity=tuple(p.fluid_density * g), reference_pressure=0.0,
                           reference_temperature=CELSIUS)
+        temperatures = self.temperature_range(mesh)
         if "Tm" in fields:
             b.matrix_heat(fd)
-            b.model.ranges["Tm"] = self.temperature_range(mesh)
+            b.model.ranges["Tm"] = temperatures
         b.model.facets.extend(facets)
         model = b.build()
         init = {"u": lambda x: np.zeros((len(x), dim)), "pm": p0, "Tm": T0}
-        return Setup(model, bcs, self.scales(mesh, fields), {f: init[f] for f in fields},
+        return Setup(model, bcs, self.scales(mesh, fields, temperatures), {f: init[f] for f in fields},
                      DeckMonitor(fields, init))
 
     def initial_temperature(self):
@@ -402,7 +268,7 @@ class Reservoir(Scene):
             return Dirichlet("u", label, lambda x, t: np.stack([e(x) for e in parts], axis=1))
         if suffix == "traction" or suffix == "normal_stress":
             return self.load(label, suffix, text, option, dim)
-        e = expression(text, option, dim)
+        e = Expression(text, option, dim)
         if suffix == "pressure":
             return Dirichlet("pm", label, lambda x, t: e(x))
         if suffix == "temperature":
@@ -420,7 +286,7 @@ class Reservoir(Scene):
         if suffix == "traction":
             parts = vector_expressions(text, option, dim)
         else:
-            sigma_n = expression(text, option, dim)
+            sigma_n = Expression(text, option, dim)
 
         def f0(ctx):
             x = ctx.x.reshape(-1, dim)
@@ -510,7 +376,7 @@ class Reservoir(Scene):
             if bv.temperature:
                 option = P.named_option("bc", name, "temperature")
                 pts = mesh.point_coordinates(mesh.label_points(name, 0))
-                given.append((option, expression(bv.temperature, "-" + option, mesh.dim)(pts), pts))
+                given.append((option, Expression(bv.temperature, "-" + option, mesh.dim)(pts), pts))
         message = None
         for option, T, pts in given:
             message = message or first_not_liquid(option, T, values_at(self.p.initial_pressure, pts), pts)
@@ -525,17 +391,17 @@ class Reservoir(Scene):
         for name, bv in self.bc.items():
             if bv.temperature:
                 pts = mesh.point_coordinates(mesh.label_points(name, 0))
-                values.append(expression(bv.temperature, f"-thm_bc_{name}_temperature", mesh.dim)(pts))
+                values.append(Expression(bv.temperature, f"-thm_bc_{name}_temperature", mesh.dim)(pts))
         v = np.concatenate(values)
         comm = mesh.dm.comm
         return Range(probes.global_min(comm, v) + CELSIUS, probes.global_max(comm, v) + CELSIUS)
 
-    def scales(self, mesh, fields) -> dict:
+    def scales(self, mesh, fields, temperatures: Range) -> dict:
         """Unknown scales from the deck's own ranges: the spread of the
         temperatures and pressures, the displacement they cause over the domain."""
         p, comm = self.p, mesh.dm.comm
         extent = domain_extent(mesh)
-        Tr = self.temperature_range(mesh)
+        Tr = temperatures
         dT = max(Tr.upper - Tr.lower, 1.0)
         p0 = values_at(p.initial_pressure, mesh.vertex_coords)
         plo, phi = probes.global_min(comm, p0), probes.global_max(comm, p0)
@@ -544,46 +410,6 @@ class Reservoir(Scene):
         strain = max(p.rock_thermal_expansion * dT / 3, p.rock_biot_coefficient * dp / p.bulk_modulus, 1e-6)
         out["u"] = FieldScale(strain * extent)
         return {f: out[f] for f in fields}
-
-
-def corners(comm, points, dim: int) -> tuple[np.ndarray, np.ndarray]:
-    """(lowest, highest) coordinate along each axis of ``points`` (n, dim) over all ranks."""
-    lo = np.array([probes.global_min(comm, points[:, a]) for a in range(dim)])
-    hi = np.array([probes.global_max(comm, points[:, a]) for a in range(dim)])
-    return lo, hi
-
-
-def domain_extent(mesh) -> float:
-    """The mesh's largest extent along an axis (m, collective)."""
-    lo, hi = corners(mesh.dm.comm, mesh.vertex_coords, mesh.dim)
-    return float(np.max(hi - lo))
-
-
-def first_not_liquid(option: str, temps, p_gauge, points) -> str | None:
-    """The message of the first point where ``temps`` (degC) is not liquid water
-    at the gauge pressure ``p_gauge`` (Pa), or None.  The saturation
-    temperature grows with the pressure, so it is taken exactly only at the
-    points that a grid of pressures below theirs does not clear."""
-    from petthm.physics.fluid import ATMOSPHERE, check_liquid, liquid_range
-    if not len(temps):
-        return None
-    pa = np.asarray(p_gauge, dtype=float) + ATMOSPHERE
-    grid = np.geomspace(max(pa.min(), 611.3), max(pa.max(), 611.4), 64)
-    below = grid[np.clip(np.searchsorted(grid, pa, side="right") - 1, 0, len(grid) - 1)]
-    cleared = np.zeros(len(pa), dtype=bool)
-    for q in np.unique(below):
-        bounds = liquid_range(q)
-        if bounds is not None:
-            at = (below == q) & (pa >= q)
-            lowest, highest = bounds
-            cleared |= at & (temps > lowest) & (temps < highest)
-    for k in np.flatnonzero(~cleared):
-        try:
-            check_liquid(option, float(temps[k]), float(pa[k]),
-                         f"-thm_initial_pressure at ({', '.join(f'{c:.6g}' for c in points[k])}), gauge")
-        except InputError as e:
-            return str(e)
-    return None
 
 
 def _at_facets(e: Expression, ctx) -> np.ndarray:

@@ -3,7 +3,7 @@
 import pytest
 
 from conftest import run_petthm
-from petthm.mesh.generate import layered_deck_box
+from petthm.mesh.deckmesh import layered_deck_box
 
 HOLD = [a for face in ("bottom", "west", "east", "south", "north")
         for a in (f"-thm_bc_{face}_normal_displacement", 0)]

@@ -5,7 +5,7 @@ import pytest
 
 from conftest import run_petthm
 from petthm.io.output import read_output
-from petthm.mesh.generate import layered_deck_box
+from petthm.mesh.deckmesh import layered_deck_box
 
 RHO_G = 1000.0 * 9.81            # the default water's rho_f g (Pa/m)
 

@@ -1,0 +1,80 @@
+"""Meshes for decks (../shared/docs/reservoir.md section 1; manual: user
+guide, decks): a box of named rock layers with named faces, optionally
+turned about the vertical axis, meshed with gmsh."""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from petthm.mesh.generate import _start, _write
+
+#: the names of a deck box's faces: (axis, side) -> name (z up in 3D, y up in 2D)
+FACE_NAMES_3D = {(0, 0): "west", (0, 1): "east", (1, 0): "south", (1, 1): "north", (2, 0): "bottom",
+                 (2, 1): "top"}
+FACE_NAMES_2D = {(0, 0): "west", (0, 1): "east", (1, 0): "bottom", (1, 1): "top"}
+
+
+def layered_deck_box(path: str, lower: Sequence[float], upper: Sequence[float], size: float,
+                     layers: Sequence[tuple[str, float]] = (), rotation: float = 0.0) -> str:
+    """A box (2 or 3 corners' coordinates) of rock layers for a deck
+    (../shared/docs/reservoir.md section 1): ``layers`` lists (name, top)
+    from the bottom up, each layer a named region up to its top (the last
+    reaches ``upper``; none: one region ``rock``); the faces are named
+    west/east (x), south/north (y, 3D), bottom/top (the vertical axis).
+    ``rotation`` (degrees) turns the whole mesh about the vertical axis
+    (3D) or the out-of-plane axis (2D) through the origin after meshing."""
+    dim = len(lower)
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    layers = list(layers) or [("rock", float(upper[-1]))]
+    gmsh = _start("deck")
+    occ = gmsh.model.occ
+    tops = [float(t) for _, t in layers[:-1]] + [float(upper[-1])]
+    bottoms = [float(lower[-1])] + tops[:-1]
+    cells = []
+    for z0, z1 in zip(bottoms, tops, strict=True):
+        lo, ext = lower.copy(), upper - lower
+        lo[-1], ext[-1] = z0, z1 - z0
+        cells.append(occ.addRectangle(*lo, 0, *ext) if dim == 2 else occ.addBox(*lo, *ext))
+    if len(cells) > 1:
+        occ.fragment([(dim, c) for c in cells[:1]], [(dim, c) for c in cells[1:]])
+    occ.synchronize()
+    _name_deck_groups(gmsh, dim, lower, upper, layers)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    return _write(gmsh, dim, path, place=None if not rotation else lambda g: _rotate_nodes(g, dim, rotation))
+
+
+def _name_deck_groups(gmsh, dim, lower, upper, layers) -> None:
+    """One physical group per layer (by its centre height) and per outer face."""
+    model = gmsh.model
+    tol = 1e-9 * float(np.max(upper - lower))
+    regions: dict[str, list] = {name: [] for name, _ in layers}
+    tops = [t for _, t in layers[:-1]] + [float(upper[-1])]
+    for _, tag in model.getEntities(dim):
+        bb = model.getBoundingBox(dim, tag)
+        mid = 0.5 * (bb[dim - 1] + bb[3 + dim - 1])
+        k = next(i for i, t in enumerate(tops) if mid < t + tol)
+        regions[layers[k][0]].append(tag)
+    for tag, (name, ents) in enumerate(regions.items(), start=1):
+        model.addPhysicalGroup(dim, ents, tag, name=name)
+    names = FACE_NAMES_3D if dim == 3 else FACE_NAMES_2D
+    faces: dict[str, list] = {name: [] for name in names.values()}
+    for _, tag in model.getEntities(dim - 1):
+        bb = np.asarray(model.getBoundingBox(dim - 1, tag))
+        for (axis, side), name in names.items():
+            at = (lower, upper)[side][axis]
+            if abs(bb[axis] - at) < tol and abs(bb[3 + axis] - at) < tol:
+                faces[name].append(tag)
+    for tag, (name, ents) in enumerate(faces.items(), start=len(regions) + 1):
+        model.addPhysicalGroup(dim - 1, ents, tag, name=name)
+
+
+def _rotate_nodes(gmsh, dim: int, degrees: float) -> None:
+    """Turn every node about the vertical (3D: z; 2D: out-of-plane) axis through the origin."""
+    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
+    tags, xyz, _ = gmsh.model.mesh.getNodes()
+    x = xyz.reshape(-1, 3).copy()
+    x[:, 0], x[:, 1] = c * xyz[0::3] - s * xyz[1::3], s * xyz[0::3] + c * xyz[1::3]
+    for t, p in zip(tags, x, strict=True):
+        gmsh.model.mesh.setNode(int(t), list(p), [])
