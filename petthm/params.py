@@ -212,9 +212,14 @@ def check_unknown_thm_options(classes: Iterable[type], options: PETSc.Options | 
     known = known_options(classes) | {e.lower() for e in extra}
     for key in sorted(opts.getAll()):
         if key.lower().startswith(PREFIX) and key.lower() not in known:
-            close = difflib.get_close_matches(key, sorted(known), n=1)
-            hint = f" (did you mean -{close[0]}?)" if close else ""
-            raise InputError(f"unknown option -{key}{hint}")
+            raise InputError(f"unknown option -{key}{did_you_mean(key, sorted(known), prefix='-')}")
+
+
+def did_you_mean(word: str, names: Iterable[str], prefix: str = "") -> str:
+    """' (did you mean PREFIX NAME?)' for the name of ``names`` closest to
+    ``word`` (without regard to case), or '' where none is close."""
+    close = difflib.get_close_matches(word.lower(), [n.lower() for n in names], n=1)
+    return f" (did you mean {prefix}{close[0]}?)" if close else ""
 
 
 def named_option(kind: str, name: str, suffix: str) -> str:

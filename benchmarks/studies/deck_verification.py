@@ -44,9 +44,33 @@ def main() -> None:
     for key in ("u_max", "pm_change_max", "Tm_change_max"):
         rows.append(("coupled deck, 2 ranks vs 1", f"{key} relative difference",
                      abs(two[key] - one[key]) / abs(one[key])))
+    rows += layered_rows(out, meshes)
     print("| deck | measure | measured |\n|---|---|---|")
     for deck, measure, value in rows:
         print(f"| {deck} | {measure} | {value:.2g} |")
+
+
+def layered_rows(out, meshes) -> list:
+    """The two layers of different rock (heterogeneous rock)."""
+    rows = []
+    for dim, degree in ((2, 1), (2, 2), (3, 1)):
+        ep, eT = decks.layered_flux_errors(out / f"layers_flux{dim}d_p{degree}", meshes[dim], dim, degree)
+        deck = f"two layers, flux and heat flux, {dim}D P{degree}"
+        rows += [(deck, "max abs(p - exact) / p_bottom", ep),
+                 (deck, "max abs(T - exact) / (T_bottom - T_top)", eT)]
+    for dim, degree in ((2, 2), (3, 1), (3, 2)):
+        error = decks.layered_load_error(out / f"layers_load{dim}d_p{degree}", meshes[dim], dim, degree)
+        rows.append((f"two layers under a top load, {dim}D P{degree}", "max abs(u_z - exact) / abs(u_z top)",
+                     error))
+    for field, what in (("pm", "water"), ("Tm", "heat")):
+        ratio = decks.stored_over_entered(out / f"layers_store_{field}", meshes[2], field)
+        rows.append((f"two layers, {what} entering the bottom, 2D P1", "stored / entered - 1", ratio - 1))
+    one, two = decks.ranks_changes(out / "layers_ranks", meshes[3], *decks.SANDSTONE, *decks.GRANITE,
+                                   *decks.anisotropic(3))
+    for key in ("u_max", "pm_change_max", "Tm_change_max"):
+        rows.append(("two layers, coupled, 2 ranks vs 1", f"{key} relative difference",
+                     abs(two[key] - one[key]) / abs(one[key])))
+    return rows
 
 
 if __name__ == "__main__":

@@ -89,6 +89,9 @@ class Assembler(Functionals):
                            [t for t in model.jacobians if t.region == region],
                            model.facets if region == MATRIX else [])
         self.mesh = disc.regions[self.base]
+        #: the rock region of each cell (None: one rock, or the fracture's faces)
+        self.cell_regions = model.cell_regions if self.base == MATRIX.domain else None
+        self._region_batches = None
         self.scales = scales
         self.inv_rscale = inv_rscale if inv_rscale is not None else self.default_inv_rscale(disc, scales)
         dim = self.mesh.rdim
@@ -244,11 +247,34 @@ class Assembler(Functionals):
 
     # -- residual -------------------------------------------------------------
     def chunks(self):
-        """The region's cells in batches of ``CHUNK`` (slices): bounded memory
-        for the per-point arrays of P2 in 3D."""
+        """The region's cells in batches of ``CHUNK``: bounded memory for the
+        per-point arrays of P2 in 3D.  Slices, or with ``cell_regions`` the
+        cells of one rock region per batch (slices where a region's cells
+        are consecutive, else index arrays): a batch's coefficients are
+        one region's (``CellContext.region``)."""
         n = self.mesh.ncells
-        for s in range(0, n, CHUNK):
-            yield slice(s, min(n, s + CHUNK))
+        if self.cell_regions is None:
+            for s in range(0, n, CHUNK):
+                yield slice(s, min(n, s + CHUNK))
+            return
+        if self._region_batches is None:
+            self._region_batches = list(self._batches_by_region())
+        yield from self._region_batches
+
+    def _batches_by_region(self):
+        for region in np.unique(self.cell_regions):
+            cells = np.flatnonzero(self.cell_regions == region)
+            consecutive = cells[-1] - cells[0] + 1 == len(cells)
+            for s in range(0, len(cells), CHUNK):
+                part = cells[s:s + CHUNK]
+                yield slice(int(part[0]), int(part[-1]) + 1) if consecutive else part
+
+    def region_of(self, cells) -> int | None:
+        """The rock region of a batch of ``chunks`` (None: one rock)."""
+        if self.cell_regions is None:
+            return None
+        first = cells.start if isinstance(cells, slice) else cells[0]
+        return int(self.cell_regions[first])
 
     def residual(self, xl: np.ndarray, xdl: np.ndarray, t: float, shift: float = 0.0) -> np.ndarray:
         """Local residual vector (scaled) from local solution and its time

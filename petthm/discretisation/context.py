@@ -48,6 +48,8 @@ class CellContext:
         self.dim = m.dim
         self.Jinv = m.Jinv[cells]
         self.h = m.h[cells][:, None]
+        #: the rock region of the batch (kernels/regional.py; None: one rock)
+        self.region = asm.region_of(cells)
         self._cache = {}
 
     def cached(self, key, compute: Callable):
@@ -189,6 +191,7 @@ class FacetContext(CellContext):
         self.dim = m.dim
         self.Jinv = m.Jinv[fb.cells]
         self.h = m.h[fb.cells][:, None]
+        self.region = None
         self._fb = fb
         self._cache = {"x": m.x0[fb.cells][:, None, :] + np.einsum("cak,qk->cqa", m.J[fb.cells], fb.points)}
         self.n = np.broadcast_to(fb.normals[:, None, :], self.x.shape)

@@ -180,10 +180,11 @@ class Heating:
     allow for (the thermo-mechanical heating, ``run/ranges.py``):
     ``power(ctx)`` (W/m3, positive where it heats) at the points of
     ``region``'s cells, in a field of volumetric heat capacity ``capacity``
+    (a number, or one per rock region: kernels/regional.py)
     (J/(m3 K))."""
     region: Region
     power: Callable
-    capacity: float
+    capacity: object
 
 
 @dataclass
@@ -212,6 +213,9 @@ class Model:
     mesh_checks: list[Callable] = field(default_factory=list)
     #: a heat source the temperature ranges allow for (``Heating``)
     heating: Heating | None = None
+    #: the rock region of each local cell (an index into the values of the
+    #: kernels' ``Regional`` coefficients, kernels/regional.py); None: one rock
+    cell_regions: np.ndarray | None = None
 
     def regions(self) -> list[Region]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

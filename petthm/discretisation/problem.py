@@ -177,8 +177,8 @@ class Problem:
         field's own value (the first component's)."""
         region = Region(self.disc.field(name).region, nodal=True)
         if region not in self._averaging:                 # no terms: not one of the residual's assemblers
-            self._averaging[region] = Assembler(self.disc, Model(self.model.fields), self.scales,
-                                                region=region)
+            model = Model(self.model.fields, cell_regions=self.model.cell_regions)
+            self._averaging[region] = Assembler(self.disc, model, self.scales, region=region)
         xl, _ = self.local_arrays(X or self.X, t)
         num, den = self._averaging[region].nodal_moments(xl, name, integrand, t, width)
         dofs = self.disc.field_local_dofs(name)[:, 0]
@@ -381,7 +381,7 @@ class Problem:
         if not terms or self._jacobian_point is None:
             return None
         if key not in self._term_blocks:
-            model = Model(self.model.fields, [], terms)
+            model = Model(self.model.fields, [], terms, cell_regions=self.model.cell_regions)
             assemblers = [Assembler(self.disc, model, self.scales, region=r, inv_rscale=self.inv_rscale)
                           for r in sorted({j.region for j in terms})]
             mat = compat.coo_matrix(self.dm, *self._coo_pattern(assemblers), copy=False)

@@ -210,12 +210,15 @@ class SummedBlocks:
 
     def store(self, slab: Slab, K: np.ndarray, rowfac: np.ndarray, cells) -> None:
         """Element matrices K (nc, m, n, nbF, nbG) of the elements ``cells``
-        (a slice) of a slab, each row times ``rowfac`` (nc, nbF, m)."""
+        (a slice or an index array) of a slab, each row times ``rowfac`` (nc, nbF, m)."""
         if slab not in self.values:
             self.values[slab] = np.empty(slab.size)
         view = self.blocks[slab.key][0].element_view(self.values[slab])
-        np.multiply(K.transpose(1, 2, 0, 3, 4), rowfac.transpose(2, 0, 1)[:, None, :, :, None],
-                    out=view[:, :, cells])
+        product = (K.transpose(1, 2, 0, 3, 4), rowfac.transpose(2, 0, 1)[:, None, :, :, None])
+        if isinstance(cells, slice):
+            np.multiply(*product, out=view[:, :, cells])
+        else:                                      # index arrays (``Assembler.chunks``): no view
+            view[:, :, cells] = np.multiply(*product)
 
     def skips(self, slab: Slab, keep_constant: bool) -> bool:
         """Whether a slab's element values need not be computed: a constant

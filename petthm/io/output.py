@@ -18,6 +18,7 @@ import numpy as np
 
 from petthm.discretisation.fields import Discretisation, Domain, FieldSpec
 from petthm.errors import InputError, WriteFailure, os_error_text
+from petthm.mesh.groups import CELL_SETS, cell_tags
 
 TOPOLOGY = {(1, 1): ("Polyline", 2), (1, 2): ("Edge_3", 3),
             (2, 1): ("Triangle", 3), (2, 2): ("Triangle_6", 6),
@@ -160,9 +161,11 @@ class FieldWriter:
 
     ``STEM.h5`` holds the mesh (``mesh/topology``: the node numbers of every
     cell, ``mesh/geometry``, ``mesh/partition``: the rank that wrote each
-    cell) and ``fields/NAME/K`` for output K, numbered as the distributed
-    mesh numbers its nodes: each rank writes the rows of the nodes it owns
-    (a contiguous range) and of its cells, ranks in turn (``in_turns``).
+    cell, and on the matrix of a mesh with cell groups ``mesh/region``: the
+    gmsh physical tag of each cell's region, -1 for none) and
+    ``fields/NAME/K`` for output K, numbered as the distributed mesh numbers
+    its nodes: each rank writes the rows of the nodes it owns (a contiguous
+    range) and of its cells, ranks in turn (``in_turns``).
     A restart whose partition differs writes its mesh anew (``mesh_1``, ...);
     the attribute ``meshes`` names each output's mesh group, and
     ``read_output`` reads an output with its mesh."""
@@ -180,16 +183,22 @@ class FieldWriter:
         self.h5name = stem + ".h5"
         #: per output: (time, [(field, ncomp)], mesh group, cells, nodes)
         self._steps: list[tuple[float, list[tuple[str, int]], str, int, int]] = []
+        #: the mesh groups that hold the cells' regions
+        self._region_groups: set[str] = set()
         dmo = mesh.dm.clone()
         regions = {} if region is Domain.MATRIX else {region: disc.regions[region]}
         nodes = Discretisation(mesh, [FieldSpec("node", 1, degree, region)], dm=dmo, regions=regions)
         mesh_parts = self._number_nodes(nodes)
+        if region is Domain.MATRIX and mesh.dm.hasLabel(CELL_SETS):
+            mesh_parts["region"] = (cell_tags(mesh), (self.ncells,), self.cell_range, np.int32)
         dmo.destroy()
         resume = resume_at is not None and os.path.isfile(self.h5path)
         self.group, new_mesh = self._resume(resume_at, mesh_parts) if resume else ("mesh", True)
         if new_mesh:
             self._write_parts({f"{self.group}/{k}": v for k, v in mesh_parts.items()},
                               mode="a" if resume else "w")
+            if "region" in mesh_parts:
+                self._region_groups.add(self.group)
 
     def _number_nodes(self, nodes: Discretisation) -> dict:
         """This rank's rows of the mesh datasets; sets the node and cell ranges."""
@@ -245,8 +254,8 @@ class FieldWriter:
         message = self.comm.bcast(message, root=0)
         if message:
             raise InputError(message)
-        self._steps, last, taken = self.comm.bcast(
-            (self._steps, last, taken) if self.rank == 0 else None, root=0)
+        self._steps, last, taken, self._region_groups = self.comm.bcast(
+            (self._steps, last, taken, self._region_groups) if self.rank == 0 else None, root=0)
         if self._same_mesh(last, mesh_parts):
             return last, False
         return next(f"mesh_{i}" for i in range(1, len(taken) + 2) if f"mesh_{i}" not in taken), True
@@ -274,6 +283,7 @@ class FieldWriter:
                                     groups[k], cells, nodes))
             last = groups[-1] if groups else "mesh"
             taken = sorted(g for g in h5 if g.startswith("mesh"))
+            self._region_groups = {g for g in taken if "region" in h5[g]}
         return last, taken
 
     def _same_mesh(self, group: str, mesh_parts: dict) -> bool:
@@ -328,6 +338,10 @@ class FieldWriter:
                     f'<Geometry GeometryType="{geo}">',
                     f'<DataItem Dimensions="{nnodes} {self.dim}" Format="HDF">'
                     f'{self.h5name}:/{group}/geometry</DataItem>', "</Geometry>"]
+            if group in self._region_groups:
+                out += ['<Attribute Name="region" AttributeType="Scalar" Center="Cell">',
+                        f'<DataItem Dimensions="{ncells}" NumberType="Int" Format="HDF">'
+                        f'{self.h5name}:/{group}/region</DataItem>', "</Attribute>"]
             for name, ncomp in entries:
                 kind = "Scalar" if ncomp == 1 else "Vector"
                 dims = f"{nnodes}" if ncomp == 1 else f"{nnodes} {ncomp}"
@@ -339,6 +353,16 @@ class FieldWriter:
         with open(self.xdmfpath + ".tmp", "w") as f:
             f.write("\n".join(out) + "\n")
         os.replace(self.xdmfpath + ".tmp", self.xdmfpath)
+
+
+def read_cell_regions(path: str, step: int = -1) -> np.ndarray:
+    """The region tag of each cell of output ``step``'s mesh (``FieldWriter``:
+    ``mesh/region``), in the order of its topology."""
+    import h5py
+    h5path = path if path.endswith(".h5") else os.path.join(path, "fields.h5")
+    with h5py.File(h5path, "r") as h5:
+        groups = [str(g) for g in h5.attrs.get("meshes", ["mesh"] * len(h5.attrs["times"]))]
+        return h5[f"{groups[step]}/region"][()]
 
 
 def read_output(path: str, step: int = -1) -> tuple[np.ndarray, np.ndarray, float, dict]:

@@ -19,6 +19,8 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
 from petthm.errors import InputError
 from petthm.mesh.fracture import FACE_SETS
 from petthm.mesh.topology import label_name
@@ -27,6 +29,8 @@ from petthm.mesh.topology import label_name
 #: option suffixes ambiguous)
 NAME = re.compile(r"[A-Za-z][A-Za-z0-9]*\Z")
 #: the labels DMPlex makes itself (lower case: names match without regard to case)
+#: the cell label PETSc's gmsh reader makes from the physical groups of the cells
+CELL_SETS = "Cell Sets"
 DMPLEX_LABELS = ("depth", "celltype", "cell sets", "face sets", "vertex sets")
 #: the option prefix of each kind of group
 PREFIXES = {"region": "-thm_region_", "fracture": "-thm_fracture_", "bc": "-thm_bc_", "well": "-thm_well_"}
@@ -143,3 +147,15 @@ def label_named_boundaries(dm, groups: Iterable[Group]) -> None:
             for p in dm.getStratumIS(FACE_SETS, g.tag).getIndices():
                 label.setValue(int(p), 1)
         dm.labelComplete(label)
+
+
+def cell_tags(mesh) -> np.ndarray:
+    """The "Cell Sets" label value (gmsh physical tag) of each local cell of
+    ``mesh`` (a ``plex.Mesh``), -1 where a cell has none."""
+    tags = np.full(mesh.ncells, -1, dtype=np.int32)
+    values = mesh.dm.getLabelIdIS(CELL_SETS).getIndices() if mesh.dm.getLabelSize(CELL_SETS) else []
+    for tag in values:
+        if mesh.dm.getStratumSize(CELL_SETS, tag):
+            cells = mesh.dm.getStratumIS(CELL_SETS, tag).getIndices() - mesh.cstart
+            tags[cells[(cells >= 0) & (cells < mesh.ncells)]] = tag
+    return tags

@@ -53,6 +53,7 @@ from petthm.physics.kernels import flow as fk
 from petthm.physics.kernels import friction as fr
 from petthm.physics.kernels import heat as hk
 from petthm.physics.kernels import poroelastic as pe
+from petthm.physics.kernels.regional import per_region
 from petthm.physics.kernels.wallflux import WallConduction
 from petthm.physics.materials import NUSSELT
 from petthm.physics.monitors import contact_outputs
@@ -107,12 +108,15 @@ def heat_scheme(p, degree: int, supg: bool = True) -> str:
 class ModelBuilder:
     """Composes a ``Model`` from the builders below (see the module docstring).
 
-    ``p``: the scene's ``materials.Parameters``; ``dim``: the mesh dimension.
+    ``p``: the scene's ``materials.Parameters``; ``dim``: the mesh dimension;
+    ``regions``: the parameters of each rock region (a heterogeneous rock,
+    in the order of the model's ``cell_regions``; default: ``p`` alone).
     The kernel objects made so far are public attributes: ``elastic``,
     ``mechanics``, ``aperture``, ``flows`` and ``heats`` ({Domain: object})."""
 
-    def __init__(self, p, dim: int):
+    def __init__(self, p, dim: int, regions: tuple = ()):
         self.p, self.dim = p, dim
+        self.regions = tuple(regions) or (p,)
         self.model = Model()
         self.elastic: pe.Elastic | None = None
         self.mechanics: ct.FractureMechanics | None = None
@@ -122,6 +126,11 @@ class ModelBuilder:
         self.heats: dict = {}
 
     # -- rock ---------------------------------------------------------------------------
+    def rock(self, value: Callable):
+        """A rock coefficient, ``value(parameters)``: a number (or array) where
+        every region has the same, else one per region (kernels/regional.py)."""
+        return per_region(value(q) for q in self.regions)
+
     def elasticity(self, degree: int, *, biot: bool = False, thermal: bool = False,
                    body_force: tuple = (), p_ref=None, T_ref=None) -> pe.Elastic:
         """u with drained elasticity (E, nu), the Biot coupling to pm
@@ -132,25 +141,27 @@ class ModelBuilder:
         p = self.p
         kw = {}
         if biot:           # sigma carries alpha (pm - p0): u is the displacement from the in-situ state
-            kw.update(p="pm", biot=p.rock_biot_coefficient,
+            kw.update(p="pm", biot=self.rock(lambda q: q.rock_biot_coefficient),
                       p_ref=getattr(p, "initial_pressure", 0.0) if p_ref is None else p_ref)
         if thermal:
-            kw.update(T="Tm", thermal_expansion=p.rock_thermal_expansion,
+            kw.update(T="Tm", thermal_expansion=self.rock(lambda q: q.rock_thermal_expansion),
                       T_ref=p.T0 if T_ref is None else T_ref)
-        self.elastic = pe.Elastic(p.rock_youngs_modulus, p.rock_poisson_ratio, self.dim,
+        self.elastic = pe.Elastic(self.rock(lambda q: q.rock_youngs_modulus),
+                                  self.rock(lambda q: q.rock_poisson_ratio), self.dim,
                                   body_force=body_force, **kw)
         self.model.add_field(FieldSpec("u", self.dim, degree, unit="m"))
         self.model.add(pe.elastic_terms(self.elastic))
         return self.elastic
 
-    def matrix_flow(self, degree: int, *, permeability: np.ndarray, storage: float,
-                    thermal_storage: float = 0.0, heat: bool = False,
+    def matrix_flow(self, degree: int, *, permeability, storage,
+                    thermal_storage=0.0, heat: bool = False,
                     source: Callable | None = None, gravity: tuple = (),
                     reference_pressure: float | None = None,
                     reference_temperature: float | None = None) -> fk.Flow:
         """pm: S dp/dt - B dT/dt + div(-k/mu (grad p - rho_f g)) = s (with
         ``heat``: mu(Tm), B; ``source`` s(x, t), 1/s: the manufactured
-        solutions; ``gravity``: the vector rho_f g, N/m3).  The reference
+        solutions; ``gravity``: the vector rho_f g, N/m3); the permeability
+        and storages numbers or ``Regional`` (``rock``).  The reference
         state of the stored water: -thm_initial_pressure and T0 unless given."""
         p = self.p
         p0 = getattr(p, "initial_pressure", 0.0) if reference_pressure is None else reference_pressure
@@ -177,11 +188,12 @@ class ModelBuilder:
         ``conductivity``) unless given (a rock without pores)."""
         p = self.p
         advect = Domain.MATRIX in self.flows or velocity is not None
-        C = p.rho_c if capacity is None else capacity
+        C = self.rock(lambda q: q.rho_c) if capacity is None else capacity
+        L = self.rock(lambda q: q.conductivity) if conductivity is None else conductivity
         el = self.elastic
         flow = self.flows.get(Domain.MATRIX)
         biot = (el.u, el.biot) if el is not None and flow is not None and el.p == flow.p and el.biot else ()
-        h = hk.Heat(Domain.MATRIX, "Tm", C, p.conductivity if conductivity is None else conductivity,
+        h = hk.Heat(Domain.MATRIX, "Tm", C, L,
                     p.fluid_rho_c if advect else 0.0, flow, velocity=velocity,
                     source=source, reference_temperature=reference_temperature, degree=degree,
                     biot=biot, **self._transport(degree, advect, supg, lumped))
@@ -344,7 +356,7 @@ class ModelBuilder:
         # a scene whose model has u and Tm declares -thm_thermomechanical_heating
         if self.elastic is not None and m.has("Tm") and self.p.thermomechanical_heating:
             porous = m.has("pm")
-            phi_beta = self.p.rock_porosity * self.p.fluid_thermal_expansion if porous else 0.0
+            phi_beta = self.rock(lambda q: q.rock_porosity * q.fluid_thermal_expansion) if porous else 0.0
             pm = "pm" if porous else None
             m.add(pe.heating_terms(self.elastic, "Tm", pm, phi_beta))
             m.heating = Heating(self.elastic.region, pe.heating_power(self.elastic, "Tm", pm, phi_beta),

@@ -18,6 +18,7 @@ from petthm.params import CELSIUS
 from petthm.physics.balance import BalanceMonitor, Conserved
 from petthm.physics.kernels import contact as ct
 from petthm.physics.kernels import wells as wl
+from petthm.physics.kernels.regional import at
 
 
 class Worst:
@@ -102,8 +103,9 @@ def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=No
         ap = frac_flow.aperture
         return ap.law.aperture(ctx.value(ap.mech.lam)[..., 0], ct.opening(ap.mech, ctx))
 
-    def vol(fl):
+    def vol(flow):
         def f(ctx):
+            fl = at(flow, ctx)
             s = fl.storage * (ctx.value(fl.p)[..., 0] - p0)
             if fl.T is not None and fl.thermal_storage:
                 s = s - fl.thermal_storage * (ctx.value(fl.T)[..., 0] - T0)
@@ -117,7 +119,7 @@ def fracture_balances(flows: dict, reference_aperture: float, p0: float, heat=No
         storage[Domain.MATRIX] = vol(matrix_flow)
         if elastic is not None and elastic.p == matrix_flow.p and elastic.biot:
             pore = storage[Domain.MATRIX]
-            storage[Domain.MATRIX] = lambda ctx: pore(ctx) + elastic.biot * np.trace(
+            storage[Domain.MATRIX] = lambda ctx: pore(ctx) + at(elastic, ctx).biot * np.trace(
                 ctx.grad(elastic.u), axis1=2, axis2=3)
     out = [Conserved("mass", ("pf", "pm"), storage)]
     if heat:

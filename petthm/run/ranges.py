@@ -24,6 +24,7 @@ import numpy as np
 
 from petthm.discretisation import probes
 from petthm.discretisation.model import Heating, Model, Range
+from petthm.physics.kernels.regional import at
 from petthm.scenes.base import Monitor
 
 #: the carried state's key (the scene monitor's keys are its own attribute names)
@@ -70,12 +71,13 @@ class HeatingAllowance:
         dt = t - last[0]
         xdl = (xl - last[1]) / dt
         asm = problem.region(self.heating.region)
-        peak = 0.0
+        peak = 0.0                                  # the largest heating rate, K/s
         for cells in asm.chunks():
-            power = self.heating.power(CellContext(asm, cells, xl, xdl, t, 1.0 / dt))
-            peak = max(peak, float(np.abs(power).max(initial=0.0)))
+            ctx = CellContext(asm, cells, xl, xdl, t, 1.0 / dt)
+            rate = np.abs(self.heating.power(ctx)) / at(self.heating.capacity, ctx)
+            peak = max(peak, float(rate.max(initial=0.0)))
         peak = problem.dm.comm.tompi4py().allreduce(peak, op=MPI.MAX)
-        step = dt * peak / self.heating.capacity
+        step = dt * peak
         self.total += step
         return step
 

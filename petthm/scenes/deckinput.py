@@ -14,16 +14,18 @@ from petthm.discretisation import probes
 from petthm.errors import InputError
 from petthm.expressions import Expression, split_list, values_at
 from petthm.mesh import groups as mg
-from petthm.params import DISCRETISATION, PHYSICS, param
+from petthm.params import DISCRETISATION, PHYSICS, did_you_mean, param
 from petthm.physics import materials as mt
 
 #: the fields a deck may have (rock only)
 DECK_FIELDS = ("u", "pm", "Tm")
-#: the cell label PETSc's gmsh reader makes from the physical groups of the cells
-CELL_SETS = "Cell Sets"
 #: what a deck cannot hold yet: the option prefixes and what they would set
-NOT_YET = {"thm_region_": "per-region rock properties", "thm_fracture_": "fractures",
-           "thm_fractures": "fractures", "thm_well_": "wells", "thm_wells": "wells"}
+NOT_YET = {"thm_fracture_": "fractures", "thm_fractures": "fractures", "thm_well_": "wells",
+           "thm_wells": "wells"}
+#: the rock properties a region may give (-thm_region_NAME_rock_*, ../shared/docs/reservoir.md section 2)
+REGION_FIELDS = mt.ELASTIC + ("rock_biot_coefficient", "rock_density", "rock_heat_capacity",
+                              "rock_conductivity", "rock_thermal_expansion", "rock_porosity",
+                              "rock_permeability")
 
 
 @dataclass(frozen=True)
@@ -101,12 +103,6 @@ def classify(groups, path: str) -> DeckGroups:
     return DeckGroups(dim, regions, boundaries)
 
 
-def did_you_mean(word: str, names) -> str:
-    import difflib
-    close = difflib.get_close_matches(word.lower(), [n.lower() for n in names], n=1)
-    return f" (did you mean {close[0]}?)" if close else ""
-
-
 def check_not_yet(options=None) -> None:
     """An input error for the options of what a deck cannot hold yet (``NOT_YET``)."""
     from petsc4py import PETSc
@@ -120,24 +116,32 @@ def check_not_yet(options=None) -> None:
                                  "scenes)")
 
 
-def unknown_boundary_options(groups: DeckGroups, options=None) -> None:
-    """An input error for a -thm_bc_NAME_* option whose NAME is not a boundary of the mesh."""
+def unknown_named_options(groups: DeckGroups, options=None) -> None:
+    """An input error for a -thm_bc_NAME_* (-thm_region_NAME_*) option whose
+    NAME is not a boundary (region) of the mesh, or whose suffix is not one a
+    boundary (region) takes."""
     from petsc4py import PETSc
     opts = options or PETSc.Options()
-    names = [g.name for g in groups.boundaries]
-    known = {n.lower() for n in names}
+    kinds = (("bc", "boundary", "boundaries", groups.boundaries, BC_SUFFIXES),
+             ("region", "region", "regions", groups.regions, REGION_FIELDS))
     for key in sorted(opts.getAll()):
         low = key.lower()
-        if not low.startswith("thm_bc_"):
-            continue
-        name = low[len("thm_bc_"):].split("_")[0]
-        if name not in known:
-            raise InputError(f"option -{key}: the mesh has no boundary '{name}'{did_you_mean(name, names)}; "
-                             f"its boundaries: {', '.join(names) or 'none'}")
-        suffix = low[len("thm_bc_") + len(name) + 1:]
-        if suffix not in BC_SUFFIXES:
-            raise InputError(f"option -{key}: a boundary takes {', '.join(BC_SUFFIXES)}"
-                             f"{did_you_mean(suffix, BC_SUFFIXES)}")
+        for kind, what, plural, named, suffixes in kinds:
+            if low.startswith(f"thm_{kind}_"):
+                _check_named_option(key, low[len(kind) + 5:], what, plural, [g.name for g in named], suffixes)
+
+
+def _check_named_option(key, rest, what, plural, names, suffixes) -> None:
+    """``rest``: the option's NAME_SUFFIX (lower case)."""
+    name = next((n.lower() for n in sorted(names, key=len, reverse=True) if rest.startswith(n.lower() + "_")),
+                rest.split("_")[0])
+    if name not in {n.lower() for n in names}:
+        raise InputError(f"option -{key}: the mesh has no {what} '{name}'{did_you_mean(name, names)}; "
+                         f"its {plural}: {', '.join(names) or 'none'}")
+    suffix = rest[len(name) + 1:]
+    if suffix not in suffixes:
+        raise InputError(f"option -{key}: a {what} takes {', '.join(suffixes)}"
+                         f"{did_you_mean(suffix, suffixes)}")
 
 
 # -- values of position ---------------------------------------------------------------------

@@ -22,8 +22,12 @@ What a deck holds here:
   a boundary without one has no flow, no heat flux and keeps its in-situ
   traction.
 
-Fractures, wells and per-region rock properties are not part of a deck
-yet: their options are refused with an error that says so.
+* the rock of each region (``-thm_region_NAME_rock_*``, ``REGION_FIELDS``):
+  the global value where a region gives none; every kernel takes each
+  cell's region's values (kernels/regional.py).
+
+Fractures and wells are not part of a deck yet: their options are refused
+with an error that says so.
 """
 from __future__ import annotations
 
@@ -39,26 +43,27 @@ from petthm.discretisation.model import FacetTerm, Range
 from petthm.errors import InputError
 from petthm.expressions import Expression, values_at
 from petthm.mesh import groups as mg
+from petthm.mesh.groups import CELL_SETS
 from petthm.params import CELSIUS
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
+from petthm.physics.kernels.regional import per_region
 from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults
 from petthm.scenes.deckinput import (
     BC_FIELD,
     BC_SUFFIXES,
-    CELL_SETS,
     DECK_FIELDS,
+    REGION_FIELDS,
     BoundaryValues,
     DeckParams,
     check_not_yet,
     classify,
     corners,
     deck_groups,
-    did_you_mean,
     domain_extent,
     first_not_liquid,
     insitu_tensor,
-    unknown_boundary_options,
+    unknown_named_options,
     vector_expressions,
 )
 from petthm.solvers.options import direct_solver_defaults
@@ -113,39 +118,48 @@ class Reservoir(Scene):
         self.groups = deck_groups(run.mesh_file, PETSc.COMM_WORLD.tompi4py())
         self.bc = {g.name: P.read_named(BoundaryValues(), BC_SUFFIXES, "bc", g.name)
                    for g in self.groups.boundaries}
+        #: the parameters of each region, in the order of the mesh's regions (-thm_region_NAME_rock_*)
+        self.rocks = {g.name: P.read_named(p, REGION_FIELDS, "region", g.name) for g in self.groups.regions}
 
     def parameter_sets(self):
-        """The run's and the deck's parameters, and the boundaries' values
-        (-thm_bc_NAME_*: a restart keeps them, as every physics option)."""
-        fields = []
-        for name, values in self.bc.items():
-            for f in dataclasses.fields(BoundaryValues):
-                option = P.named_option("bc", name, f.name)
-                fields.append((option, str, dataclasses.field(default=getattr(values, f.name),
-                                                              metadata={**f.metadata, "option": option})))
-        return (self.run, self.p, dataclasses.make_dataclass("Boundaries", fields, frozen=True)())
+        """The run's and the deck's parameters, the boundaries' values
+        (-thm_bc_NAME_*) and the regions' rock (-thm_region_NAME_rock_*): a
+        restart keeps them, as every physics option."""
+        by_name = {f.name: f for f in dataclasses.fields(self.p)}
+        fields = [_named_field("bc", name, f, getattr(values, f.name))
+                  for name, values in self.bc.items() for f in dataclasses.fields(BoundaryValues)]
+        fields += [_named_field("region", name, by_name[f], getattr(rock, f))
+                   for name, rock in self.rocks.items() for f in REGION_FIELDS]
+        return (self.run, self.p, dataclasses.make_dataclass("Named", fields, frozen=True)())
 
     @classmethod
     def named_options(cls, run):
         from petsc4py import PETSc
         check_not_yet()
         groups = deck_groups(run.mesh_file, PETSc.COMM_WORLD.tompi4py())
-        unknown_boundary_options(groups)
-        return P.named_options(BoundaryValues, BC_SUFFIXES, "bc", [g.name for g in groups.boundaries])
+        unknown_named_options(groups)
+        return (P.named_options(BoundaryValues, BC_SUFFIXES, "bc", [g.name for g in groups.boundaries]) |
+                {P.named_option("region", g.name, f) for f in REGION_FIELDS for g in groups.regions})
 
     @classmethod
     def named_help(cls, mesh_file):
-        """The -thm_bc_NAME_* options of the mesh's boundaries (rank 0 alone: -help)."""
+        """The -thm_bc_NAME_* options of the mesh's boundaries and the
+        -thm_region_NAME_rock_* of its regions (rank 0 alone: -help)."""
+        bc = P.help_text((BoundaryValues,)).split("\n")[1:]
+        rock = [line for line in P.help_text((cls.parameters[0],)).split("\n")[1:]
+                if line.split()[0][len("-thm_"):] in REGION_FIELDS]
         if not mesh_file:
-            return ("  Boundaries (give -thm_mesh_file F.msh to list them for its boundaries)\n" +
-                    P.help_text((BoundaryValues,)).split("\n", 1)[1].replace("-thm_", "-thm_bc_<NAME>_"))
+            return "\n".join(["  Boundaries (give -thm_mesh_file F.msh to list them for its boundaries)"] +
+                             [line.replace("-thm_", "-thm_bc_<NAME>_", 1) for line in bc] +
+                             ["  Regions (default: the global value)"] +
+                             [line.replace("-thm_", "-thm_region_<NAME>_", 1) for line in rock])
         groups = classify(mg.read_physical_names(mesh_file), mesh_file)
         lines = []
-        for g in groups.boundaries:
-            lines.append(f"  Boundary {g.name} of {mesh_file}")
-            lines += [line.replace("-thm_", f"-thm_bc_{g.name.lower()}_", 1)
-                      for line in P.help_text((BoundaryValues,)).split("\n")[1:]]
-        lines.append(f"  Regions of {mesh_file}: {', '.join(g.name for g in groups.regions)}")
+        for kind, what, named, options in (("bc", "Boundary", groups.boundaries, bc),
+                                           ("region", "Region", groups.regions, rock)):
+            for g in named:
+                lines.append(f"  {what} {g.name} of {mesh_file}")
+                lines += [line.replace("-thm_", f"-thm_{kind}_{g.name.lower()}_", 1) for line in options]
         return "\n".join(lines)
 
     # a sparse direct solve; the size rule puts the block preconditioner in its place on large decks
@@ -181,7 +195,8 @@ class Reservoir(Scene):
         """The deck's fields in canonical order: -thm_fields, else every field it has."""
         p = self.p
         has = ["u", "Tm"]
-        if np.any(p.permeability(dim) != 0):
+        permeabilities = [self.permeability(name, dim) for name in self.rocks]     # each checked
+        if any(np.any(k != 0) for k in permeabilities):
             has.append("pm")
         if not p.fields:
             return tuple(f for f in DECK_FIELDS if f in has)
@@ -189,11 +204,21 @@ class Reservoir(Scene):
         for f in wanted:
             if f not in DECK_FIELDS:
                 raise InputError(f"option -thm_fields = {p.fields}: '{f}' is not a field of a deck (rock "
-                                 f"only: {', '.join(DECK_FIELDS)}){did_you_mean(f, DECK_FIELDS)}")
+                                 f"only: {', '.join(DECK_FIELDS)}){P.did_you_mean(f, DECK_FIELDS)}")
             if f not in has:
                 raise InputError(f"option -thm_fields = {p.fields}: pm needs a permeability that is not zero "
-                                 "(-thm_rock_permeability)")
+                                 "(-thm_rock_permeability or a region's -thm_region_NAME_rock_permeability)")
         return tuple(f for f in DECK_FIELDS if f in wanted)
+
+    def check_flow_regions(self, dim: int) -> None:
+        """pm needs, in every region, a permeability or a storage that is
+        not zero (else its pressure is undetermined there)."""
+        for name, q in self.rocks.items():
+            if q.storage == 0 and not np.any(self.permeability(name, dim)):
+                raise InputError(f"region {name}: neither permeability nor storage (porosity 0 and Biot "
+                                 "coefficient 1), so its pressure is undetermined; give it a permeability "
+                                 f"(-thm_region_{name}_rock_permeability) or a porosity, or leave pm out "
+                                 "(-thm_fields)")
 
     def degrees(self, fields, degree: int) -> int:
         """The degree of pm and Tm: -thm_fe_degree_flow, else P1 with P2 u
@@ -210,7 +235,7 @@ class Reservoir(Scene):
         T0, p0 = self.initial_temperature(), self.initial_pressure()
         bcs, facets = self.boundary_conditions(mesh, fields)
         self.check_water(mesh, fields)
-        b = ModelBuilder(dataclasses.replace(p, initial_temperature=0.0, initial_pressure=0.0), dim)
+        b = ModelBuilder(*self.rock_parameters(dim))
         g = np.zeros(dim)
         g[-1] = -p.gravity
         if "u" in fields:
@@ -218,8 +243,11 @@ class Reservoir(Scene):
             self.check_equilibrium(mesh)
             b.elasticity(degree, biot="pm" in fields, thermal="Tm" in fields, p_ref=p0, T_ref=T0)
         if "pm" in fields:
-            b.matrix_flow(fd, permeability=p.permeability(dim), storage=p.storage,
-                          thermal_storage=p.rock_porosity * p.fluid_thermal_expansion, heat="Tm" in fields,
+            self.check_flow_regions(dim)
+            b.matrix_flow(fd, permeability=per_region(self.permeability(name, dim) for name in self.rocks),
+                          storage=b.rock(lambda q: q.storage),
+                          thermal_storage=b.rock(lambda q: q.rock_porosity * q.fluid_thermal_expansion),
+                          heat="Tm" in fields,
                           gravity=tuple(p.fluid_density * g), reference_pressure=0.0,
                           reference_temperature=CELSIUS)
         temperatures = self.temperature_range(mesh)
@@ -228,9 +256,35 @@ class Reservoir(Scene):
             b.model.ranges["Tm"] = temperatures
         b.model.facets.extend(facets)
         model = b.build()
+        if len(set(map(_rock_values, self.rocks.values()))) > 1:
+            model.cell_regions = self.cell_regions(mesh)
         init = {"u": lambda x: np.zeros((len(x), dim)), "pm": p0, "Tm": T0}
         return Setup(model, bcs, self.scales(mesh, fields, temperatures), {f: init[f] for f in fields},
                      DeckMonitor(fields, init))
+
+    def rock_parameters(self, dim: int) -> tuple:
+        """(global parameters, dim, each region's parameters) of the model
+        builder; the in-situ state's expressions are the scene's own (the
+        builder's initial values are 0)."""
+        zero = {"initial_temperature": 0.0, "initial_pressure": 0.0}
+        regions = tuple(dataclasses.replace(q, **zero) for q in self.rocks.values())
+        return dataclasses.replace(self.p, **zero), dim, regions
+
+    def permeability(self, name: str, dim: int) -> np.ndarray:
+        """The permeability tensor of region ``name`` (its option named in an error)."""
+        option = "-" + P.named_option("region", name, "rock_permeability") \
+            if self.rocks[name].rock_permeability != self.p.rock_permeability else "-thm_rock_permeability"
+        return self.rocks[name].permeability(dim, option)
+
+    def cell_regions(self, mesh) -> np.ndarray:
+        """The index of each local cell's region (in the order of ``rocks``), from its tag."""
+        top = max(g.tag for g in self.groups.regions)
+        lookup = np.full(top + 1, -1)
+        for i, g in enumerate(self.groups.regions):
+            lookup[g.tag] = i
+        tags = mg.cell_tags(mesh)
+        known = (tags >= 0) & (tags <= top)
+        return np.where(known, lookup[np.clip(tags, 0, top)], -1)
 
     def initial_temperature(self):
         """T0(x) in kelvin at points (n, d)."""
@@ -341,10 +395,11 @@ class Reservoir(Scene):
             step = np.zeros(dim)
             step[j] = delta
             div += (S(x + step)[:, :, j] - S(x - step)[:, :, j]) / (2 * delta)
-        rho_b = (1 - p.rock_porosity) * p.rock_density + p.rock_porosity * p.fluid_density
+        densities = np.array([_bulk_density(q) for q in self.rocks.values()])
+        rho_b = densities[self.cell_regions(mesh)]
         div[:, -1] += rho_b * p.gravity
         largest = probes.global_max(comm, np.abs(S(x)), empty=0.0)
-        scale = rho_b * p.gravity if p.gravity > 0 else largest / extent
+        scale = densities.max() * p.gravity if p.gravity > 0 else largest / extent
         if scale == 0:
             return
         err = np.linalg.norm(div, axis=1) / scale
@@ -407,9 +462,27 @@ class Reservoir(Scene):
         plo, phi = probes.global_min(comm, p0), probes.global_max(comm, p0)
         dp = max(phi - plo, p.fluid_density * p.gravity * extent, 1e5)
         out = {"Tm": FieldScale(dT, 0.5 * (Tr.upper + Tr.lower)), "pm": FieldScale(dp, 0.5 * (plo + phi))}
-        strain = max(p.rock_thermal_expansion * dT / 3, p.rock_biot_coefficient * dp / p.bulk_modulus, 1e-6)
+        strains = [max(q.rock_thermal_expansion * dT / 3, q.rock_biot_coefficient * dp / q.bulk_modulus)
+                   for q in self.rocks.values()]
+        strain = max(strains + [1e-6])
         out["u"] = FieldScale(strain * extent)
         return {f: out[f] for f in fields}
+
+
+def _bulk_density(q) -> float:
+    """rho_b = (1 - phi) rho_s + phi rho_f of a region's parameters."""
+    return (1 - q.rock_porosity) * q.rock_density + q.rock_porosity * q.fluid_density
+
+
+def _rock_values(q) -> tuple:
+    """A region's rock properties, comparable (``REGION_FIELDS``)."""
+    return tuple(getattr(q, f) for f in REGION_FIELDS)
+
+
+def _named_field(kind: str, name: str, f: dataclasses.Field, value) -> tuple:
+    """A field of the dataclass of a named group's values (``parameter_sets``)."""
+    option = P.named_option(kind, name, f.name)
+    return (option, type(value), dataclasses.field(default=value, metadata={**f.metadata, "option": option}))
 
 
 def _at_facets(e: Expression, ctx) -> np.ndarray:

@@ -40,10 +40,7 @@ def biot_thm_problem(tmp_path, heating: bool, scheme: str = "auto", deck: bool =
     (-thm_heat_transport).  ``deck``: as a deck builds it, with gravity in
     Darcy's law, mu(T) of water, and the in-situ pressure and temperature
     functions of position."""
-    path = meshing.box(str(tmp_path / "square.msh"), [10.0, 10.0], 2.5)
-    dm = read_plex(path, PETSc.COMM_WORLD)
-    label_boundaries(dm, {"bottom": lambda x: np.isclose(x[:, 1], 0.0)})
-    mesh = Mesh(distribute(dm))
+    mesh = square_mesh(tmp_path)
     p = _parameters(heating, scheme, water=deck)
     b = ModelBuilder(p, 2)
     refs = dict(p_ref=lambda x: 1e4 * (10 - x[:, 1]),
@@ -53,7 +50,19 @@ def biot_thm_problem(tmp_path, heating: bool, scheme: str = "auto", deck: bool =
                   thermal_storage=p.rock_porosity * p.fluid_thermal_expansion, heat=True,
                   gravity=(0.0, -1000.0 * 9.81) if deck else ())
     b.matrix_heat(1)
-    model = b.build()
+    return held_at_the_bottom(mesh, b.build(), p)
+
+
+def square_mesh(tmp_path) -> Mesh:
+    """A 10 m square of 2.5 m cells, its bottom labelled."""
+    path = meshing.box(str(tmp_path / "square.msh"), [10.0, 10.0], 2.5)
+    dm = read_plex(path, PETSc.COMM_WORLD)
+    label_boundaries(dm, {"bottom": lambda x: np.isclose(x[:, 1], 0.0)})
+    return Mesh(distribute(dm))
+
+
+def held_at_the_bottom(mesh, model, p) -> Problem:
+    """The u, pm, Tm problem of ``model`` with u = 0, pm = 0 and Tm = T0 on the bottom, at T0."""
     bcs = [Dirichlet("u", "bottom", lambda x, t: np.zeros((len(x), 2))),
            Dirichlet("pm", "bottom", lambda x, t: np.zeros(len(x))),
            Dirichlet("Tm", "bottom", lambda x, t: np.full(len(x), p.T0))]

@@ -43,21 +43,27 @@ def hydrostatic_error(outdir, mesh, dim, degree) -> float:
     return float(np.max(np.abs(p.ravel() - RHO_G * -x[:, dim - 1]))) / (RHO_G * 1000)
 
 
+def steady_fluxes(outdir, mesh, *rock) -> tuple:
+    """(x, p, T) at the end of a pm, Tm deck of ``rock`` whose bottom takes
+    water at 1e-8 m/s and heat at 0.09 W/m2, its top held at p = 0 and
+    20 degC, run to steady state (the water's heat capacity made negligible)."""
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "pm,Tm", *rock,
+                      "-thm_fluid_heat_capacity", 1e-9,
+                      "-thm_bc_top_pressure", 0, "-thm_bc_bottom_flux", -1e-8, "-thm_initial_temperature", 20,
+                      "-thm_bc_top_temperature", 20, "-thm_bc_bottom_heat_flux", -0.09, *STEADY,
+                      "-thm_final_time", 1e14, "-thm_dt_max", 1e13)
+    assert s["status"] == "completed"
+    x, p = final(outdir, "pm")
+    return x, p, final(outdir, "Tm")[1]
+
+
 def flux_errors(outdir, mesh) -> tuple[float, float]:
     """No gravity: water enters through the bottom at 1e-8 m/s (an outward
     flux of -1e-8) with the top at p = 0, so p = -1e3 z (k = 1e-14, mu =
     1e-3); heat enters at 0.09 W/m2 with the top at 20 degC, so T = 20 -
     0.09 z / 3 (the water's heat capacity made negligible): the largest
     errors relative to 1 MPa and 30 K."""
-    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "pm,Tm",
-                      "-thm_fluid_heat_capacity", 1e-9, "-thm_rock_conductivity", 3.0,
-                      "-thm_fluid_conductivity", 3.0,
-                      "-thm_bc_top_pressure", 0, "-thm_bc_bottom_flux", -1e-8, "-thm_initial_temperature", 20,
-                      "-thm_bc_top_temperature", 20, "-thm_bc_bottom_heat_flux", -0.09, *STEADY,
-                      "-thm_final_time", 1e14, "-thm_dt_max", 1e13)
-    assert s["status"] == "completed"
-    x, p = final(outdir, "pm")
-    _, T = final(outdir, "Tm")
+    x, p, T = steady_fluxes(outdir, mesh, "-thm_rock_conductivity", 3.0, "-thm_fluid_conductivity", 3.0)
     return (float(np.max(np.abs(p.ravel() - (-1e3 * x[:, 2])))) / 1e6,
             float(np.max(np.abs(T.ravel() - (20 - 0.03 * x[:, 2])))) / 30)
 
@@ -103,10 +109,11 @@ def turned_error(outdir, dim) -> float:
     return float(np.max(np.abs(p.ravel() - 3e6 * (1 - upright[:, 0] / 300.0)))) / 3e6
 
 
-def ranks_changes(outdir, mesh) -> tuple[dict, dict]:
-    """A coupled deck (u, pm, Tm) cooled from the top, on 1 and 2 ranks."""
+def ranks_changes(outdir, mesh, *rock) -> tuple[dict, dict]:
+    """A coupled deck (u, pm, Tm) cooled from the top, on 1 and 2 ranks
+    (``rock``: options of its rock)."""
     opts = ("-thm_mesh_file", mesh, "-thm_initial_temperature", 80, "-thm_bc_top_temperature", 20,
-            "-thm_bc_top_pressure", 0, "-thm_rock_porosity", 0.1, "-thm_final_time", 3e7, *HOLD)
+            "-thm_bc_top_pressure", 0, "-thm_rock_porosity", 0.1, "-thm_final_time", 3e7, *HOLD, *rock)
     _, s1 = run_petthm("reservoir", outdir / "one", *opts)
     _, s2 = run_petthm("reservoir", outdir / "two", *opts, ranks=2)
     return s1["change"], s2["change"]
@@ -189,3 +196,117 @@ def test_the_flow_degree_is_p1_beside_p2_u_unless_set(tmp_path, meshes, option, 
     assert s["status"] == "stopped"
     fields = read_output(str(tmp_path / flow_file))[3]
     assert "pm" in fields and "Tm" in fields and ("u" in fields) == (flow_file == "fields.h5")
+
+
+# -- heterogeneous rock ---------------------------------------------------------------------------
+#: the lower layer's rock, where it differs from the upper's (the global values)
+GRANITE = ("-thm_region_granite_rock_permeability", "1e-15", "-thm_region_granite_rock_conductivity", 1.5,
+           "-thm_region_granite_rock_youngs_modulus", 60e9, "-thm_region_granite_rock_poisson_ratio", 0.2,
+           "-thm_region_granite_rock_porosity", 0.01, "-thm_region_granite_rock_biot_coefficient", 0.5,
+           "-thm_region_granite_rock_density", 2700, "-thm_region_granite_rock_heat_capacity", 900)
+#: the upper layer: softer, more porous
+SANDSTONE = ("-thm_rock_conductivity", 3.0, "-thm_rock_youngs_modulus", 20e9, "-thm_rock_poisson_ratio", 0.3,
+             "-thm_rock_porosity", 0.2, "-thm_rock_biot_coefficient", 0.9, "-thm_rock_density", 2400,
+             "-thm_rock_heat_capacity", 800)
+
+
+def anisotropic(dim) -> tuple:
+    """The upper layer's permeability: the vertical a fifth of the horizontal."""
+    return ("-thm_rock_permeability", "1e-14,1e-14,2e-15" if dim == 3 else "1e-14,2e-15")
+
+
+def layered_flux_errors(outdir, mesh, dim, degree) -> tuple[float, float]:
+    """Water enters through the bottom at 1e-8 m/s and heat at 0.09 W/m2,
+    the top held at p = 0 and 20 degC: in steady state each layer carries
+    the same flux, so p and T are linear in each layer with slopes
+    q mu / k_zz and q_h / lambda of its own rock (water's heat capacity made
+    negligible, no porosity so that lambda is the rock's); the largest errors
+    relative to the pressure and temperature at the bottom."""
+    x, p, T = steady_fluxes(outdir, mesh, *SANDSTONE, *GRANITE, *anisotropic(dim), "-thm_rock_porosity", 0,
+                            "-thm_region_granite_rock_porosity", 0, "-thm_fe_degree", degree)
+    depth = -x[:, dim - 1]
+    kzz = 2e-15                                        # the sandstone's vertical permeability
+    upper, lower = np.minimum(depth, 500.0), np.maximum(depth - 500.0, 0.0)
+    p_exact = 1e-8 * 1e-3 * (upper / kzz + lower / 1e-15)
+    T_exact = 20 + 0.09 * (upper / 3.0 + lower / 1.5)
+    return (float(np.max(np.abs(p.ravel() - p_exact)) / p_exact.max()),
+            float(np.max(np.abs(T.ravel() - T_exact)) / (T_exact.max() - 20)))
+
+
+def layered_load_error(outdir, mesh, dim, degree) -> float:
+    """The two layers on rollers under a total normal stress of 10 MPa on
+    the top (no in-situ stress): uniaxial strain, each layer shortened by
+    10 MPa / M of its own rock (M = E (1 - nu) / ((1 + nu) (1 - 2 nu))), so
+    u_z is linear in each layer; its largest error relative to the top's."""
+    rollers = [a for face in ("bottom", "west", "east", "south", "north")[:2 * dim - 1]
+               for a in (f"-thm_bc_{face}_normal_displacement", 0)]
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "u", *SANDSTONE, *GRANITE,
+                      "-thm_fe_degree", degree, "-thm_bc_top_normal_stress", 1e7, *rollers,
+                      "-thm_dt_initial", 1, "-thm_final_time", 1)
+    assert s["status"] == "completed"
+    x, u = final(outdir, "u")
+
+    def constrained(E, nu):
+        return E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    height = x[:, dim - 1] + 1000.0
+    exact = -1e7 * (np.minimum(height, 500.0) / constrained(60e9, 0.2) +
+                    np.maximum(height - 500.0, 0.0) / constrained(20e9, 0.3))
+    return float(np.max(np.abs(u[:, dim - 1] - exact)) / np.abs(exact).max())
+
+
+@pytest.mark.parametrize("dim,degree", [(2, 1), (2, 2), (3, 1)])
+def test_layers_of_different_rock_carry_one_flux_with_their_own_gradients(tmp_path, meshes, dim, degree):
+    """Flux continuity across the region boundary: the piecewise-linear
+    profiles are exact (nodes on the boundary) for P1 and P2."""
+    ep, eT = layered_flux_errors(tmp_path, meshes[dim], dim, degree)
+    assert ep < 1e-8 and eT < 1e-8
+
+
+@pytest.mark.parametrize("dim,degree", [(2, 2), (3, 1), (3, 2)])
+def test_layers_of_different_stiffness_shorten_each_by_its_own_modulus(tmp_path, meshes, dim, degree):
+    assert layered_load_error(tmp_path, meshes[dim], dim, degree) < 1e-10
+
+
+def stored_over_entered(outdir, mesh, field, uniform=False) -> float:
+    """Water (``pm``) or heat (``Tm``) enters through the bottom of the 2D
+    column, which holds it all (no other boundary condition): the amount
+    each region stores, int S (p - p0) or int C (T - T0) with its own S or
+    C (``uniform``: the upper layer's everywhere, the negative control),
+    summed from the written P1 fields and the written region of each
+    cell, over the amount that entered: 1 to the solver's tolerance."""
+    from petthm.io.output import read_cell_regions
+    flux = {"pm": ("-thm_bc_bottom_flux", -1e-8), "Tm": ("-thm_bc_bottom_heat_flux", -0.09)}[field]
+    t_end = 1e7
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", field, *SANDSTONE, *GRANITE,
+                      "-thm_fe_degree", 1, "-thm_initial_temperature", 20, *flux,
+                      "-thm_dt_initial", 1e6, "-thm_final_time", t_end)
+    assert s["status"] == "completed"
+    x, cells, t, fields = read_output(str(outdir / "fields.h5"))
+    tags = read_cell_regions(str(outdir))
+    granite = tags == min(tags)                        # the lower layer's group was made first
+    change = fields[field].ravel() - (0.0 if field == "pm" else 20.0)          # Tm is written in degC
+    corners = x[cells]
+    area = 0.5 * np.abs(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]))
+    mean = change[cells].mean(axis=1)
+
+    def coefficient(phi, alpha, E, nu, rho, c):
+        if field == "Tm":
+            return (1 - phi) * rho * c + phi * 1000.0 * 4200.0
+        bulk = E / (3 * (1 - 2 * nu))
+        return phi * 4.5e-10 + (alpha - phi) * (1 - alpha) / bulk
+    upper = coefficient(0.2, 0.9, 20e9, 0.3, 2400, 800)
+    lower = upper if uniform else coefficient(0.01, 0.5, 60e9, 0.2, 2700, 900)
+    stored = float(np.sum(np.where(granite, lower, upper) * area * mean))
+    return stored / (abs(flux[1]) * 200.0 * t)
+
+
+@pytest.mark.parametrize("field", ["pm", "Tm"])
+def test_each_region_stores_with_its_own_storage_and_capacity(tmp_path, meshes, field):
+    assert stored_over_entered(tmp_path, meshes[2], field) == pytest.approx(1.0, abs=1e-8)
+    assert abs(stored_over_entered(tmp_path / "control", meshes[2], field, uniform=True) - 1.0) > 1e-2
+
+
+def test_one_rank_equals_two_on_layers_of_different_rock(tmp_path, meshes):
+    one, two = ranks_changes(tmp_path, meshes[3], *SANDSTONE, *GRANITE, *anisotropic(3))
+    for key in ("u_max", "pm_change_max", "Tm_change_max"):
+        assert two[key] == pytest.approx(one[key], rel=1e-8), key

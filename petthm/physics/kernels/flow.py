@@ -34,6 +34,7 @@ import numpy as np
 
 from petthm.discretisation.model import CellJacobian, CellResidual, Domain, Region
 from petthm.physics.fluid import Viscosity
+from petthm.physics.kernels.regional import Regional, at, regional
 
 
 @dataclass(frozen=True)
@@ -41,14 +42,15 @@ class Flow:
     """Flow coefficients of one region (see the module docstring).  With an
     ``aperture`` (a deformable fracture, ``contact.Aperture``) the storage,
     thermal storage and permeability are per unit aperture: S = a storage,
-    B = a thermal_storage, K = a^3 permeability, and da/dt joins the storage."""
+    B = a thermal_storage, K = a^3 permeability, and da/dt joins the storage.
+    S, B and K may be ``Regional`` (kernels/regional.py) on the rock."""
     region: Domain
     p: str                          # pressure field
     T: str | None                # temperature field of mu(T) and B (None: isothermal)
-    storage: float                  # S
-    permeability: np.ndarray        # K (d, d)
+    storage: float | Regional       # S
+    permeability: np.ndarray | Regional        # K (d, d)
     viscosity: Viscosity = field(default_factory=Viscosity)
-    thermal_storage: float = 0.0    # B
+    thermal_storage: float | Regional = 0.0    # B
     aperture: object | None = None
     source: Callable | None = None   # s(x, t): a volume (area, on the fracture) source, 1/s
     reference_pressure: float = 0.0      # p0 of a deformable fracture's content a (1 + s)
@@ -77,6 +79,7 @@ def mobility(fl: Flow, ctx):
 
 def unit_darcy(fl: Flow, ctx):
     """K (grad p - rho_f g) (nc, nq, d), K without a deformable fracture's a^3."""
+    fl = at(fl, ctx)
     drive = ctx.grad(fl.p)[:, :, 0, :]
     if fl.gravity:
         drive = drive - np.asarray(fl.gravity, dtype=float)
@@ -91,6 +94,7 @@ def permeability_grad_p(fl: Flow, ctx):
 
 def _storages(fl: Flow, ctx):
     """(S, B): numbers, or per point in a deformable fracture."""
+    fl = at(fl, ctx)
     ap = aperture_state(fl, ctx)
     return (fl.storage, fl.thermal_storage) if ap is None else (fl.storage * ap.a, fl.thermal_storage * ap.a)
 
@@ -116,6 +120,7 @@ def increment_product(ctx, adot, sdot):
 
 def compressed_content(fl: Flow, ctx):
     """(s, sdot) of a deformable fracture's content a (1 + s) (the module docstring), (nc, nq)."""
+    fl = at(fl, ctx)
     s = fl.storage * (ctx.value(fl.p)[..., 0] - fl.reference_pressure)
     sdot = fl.storage * ctx.dot(fl.p)[..., 0]
     if fl.T is not None and fl.thermal_storage:
@@ -136,6 +141,7 @@ def water_content(fl: Flow, ctx):
     term of ``flow_f0`` (without the source).  Rigid rock or fracture: the
     change S (p - p0) - B (T - T0) from the reference state; a deformable
     fracture: the whole content a (1 + s) (dm/da = 1 + s; else dm/da is None)."""
+    fl = at(fl, ctx)
     if fl.aperture is None:
         m = fl.storage * (ctx.value(fl.p)[..., 0] - fl.reference_pressure)
         dT = -fl.thermal_storage if fl.T is not None else 0.0
@@ -176,6 +182,7 @@ def flow_g0_pp(fl: Flow, ctx):
 
 
 def flow_g3_pp(fl: Flow, ctx):
+    fl = at(fl, ctx)
     M, _ = mobility(fl, ctx)
     ap = aperture_state(fl, ctx)
     if ap is None and (fl.T is None or not fl.viscosity.water):
@@ -207,13 +214,13 @@ def flow_s1_aperture(fl: Flow, ctx):
 
 def flow_terms(fl: Flow) -> tuple[list, list]:
     """Residual and Jacobian registrations of a flow equation."""
-    res = [CellResidual(fl.p, partial(flow_f0, fl), partial(flow_f1, fl), region=Region(fl.region))]
-    jac = [CellJacobian(fl.p, fl.p, g0=partial(flow_g0_pp, fl) if fl.storage else None,
-                        g3=partial(flow_g3_pp, fl), region=Region(fl.region))]
+    res = [CellResidual(fl.p, regional(flow_f0, fl), regional(flow_f1, fl), region=Region(fl.region))]
+    jac = [CellJacobian(fl.p, fl.p, g0=regional(flow_g0_pp, fl) if fl.storage else None,
+                        g3=regional(flow_g3_pp, fl), region=Region(fl.region))]
     if fl.T is not None and (fl.thermal_storage or fl.viscosity.water):
         jac.append(CellJacobian(fl.p, fl.T,
-                                g0=partial(flow_g0_pT, fl) if fl.thermal_storage else None,
-                                g2=partial(flow_g2_pT, fl) if fl.viscosity.water else None,
+                                g0=regional(flow_g0_pT, fl) if fl.thermal_storage else None,
+                                g2=regional(flow_g2_pT, fl) if fl.viscosity.water else None,
                                 region=Region(fl.region)))
     if fl.aperture is not None:
         jac += fl.aperture.jacobians(fl.p, partial(flow_s0_aperture, fl), partial(flow_s1_aperture, fl))

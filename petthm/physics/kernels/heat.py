@@ -61,7 +61,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from functools import cached_property, partial
+from functools import cached_property
 
 import numpy as np
 
@@ -80,6 +80,7 @@ from petthm.physics.kernels.flow import (
     unit_darcy,
 )
 from petthm.physics.kernels.limiter import SETTLE, FluxLimiter
+from petthm.physics.kernels.regional import Regional, at, regional
 from petthm.physics.kernels.transport import StoredWater, Upwinding, stored_water_terms, upwinding_terms
 from petthm.physics.kernels.wallflux import SIDES, WallConduction, supg_g3, wall_flux
 
@@ -103,8 +104,8 @@ class Heat:
     floors the residual of a field varying by far less than T."""
     region: Domain
     T: str
-    capacity: float                 # C
-    conductivity: object            # L: a number, or a (d, d) tensor (no advection then)
+    capacity: float | Regional      # C
+    conductivity: object            # L: a number, a (d, d) tensor (no advection then) or a Regional
     fluid_rho_c: float = 0.0        # rho_f C_f (0: no advection)
     flow: Flow | None = None     # the flow that advects heat, or
     velocity: PointFunction | None = None   # a prescribed Darcy velocity (m/s)
@@ -218,6 +219,7 @@ def advective_tau_term(b, ctx, degree: int):
 
 
 def heat_point(h: Heat, ctx) -> _HeatPoint:
+    h = at(h, ctx)
     return ctx.cached(("heat", id(h)), lambda: _HeatPoint(h, ctx))
 
 
@@ -235,6 +237,7 @@ def heat_f0_capacity(h: Heat, ctx):
 
 def stored_energy_rate(h: Heat, ctx):
     """C dT/dt, or C d(aT)/dt on a deformable fracture (``heat_f0``), (nc, nq)."""
+    h = at(h, ctx)
     ap = aperture_state(h, ctx)
     if ap is None:
         return h.capacity * ctx.dot(h.T)[..., 0]
@@ -372,12 +375,17 @@ def heat_s1_aperture(h: Heat, ctx):
     return s
 
 
+def _scalar(value) -> bool:
+    """A number, or one number per region."""
+    return all(np.isscalar(v) for v in value.values) if isinstance(value, Regional) else np.isscalar(value)
+
+
 def _check_heat(h: Heat) -> None:
     if h.flow is not None and h.velocity is not None:
         raise ValueError("heat is advected by a flow or by a prescribed velocity, not both")
     if h.reference_temperature and h.velocity is None:
         raise ValueError("a reference temperature only with a prescribed (divergence-free) velocity")
-    if h.advects and not np.isscalar(h.conductivity):
+    if h.advects and not _scalar(h.conductivity):
         raise ValueError("a conductivity tensor is only supported without advection")
     if h.aperture is not None and (not np.isscalar(h.conductivity) or h.velocity is not None):
         raise ValueError("a deformable fracture takes a scalar conductivity and the flow's velocity")
@@ -395,32 +403,32 @@ def heat_terms(h: Heat) -> tuple[list, list]:
     supg = advect and h.supg
     hh = h if advect else replace(h, fluid_rho_c=0.0, flow=None, velocity=None, supg=False)
     region, lumped = Region(h.region), Region(h.region, lumped=True)
-    res = [CellResidual(h.T, partial(heat_f0, hh), partial(heat_f1, hh), region=region)]
+    res = [CellResidual(h.T, regional(heat_f0, hh), regional(heat_f1, hh), region=region)]
     water = h.upwind and h.flow is not None
     capacity = h.lumped and not (water and h.aperture is not None)   # else the content a (1 + s)
     if capacity:
-        res.append(CellResidual(h.T, partial(heat_f0_capacity, hh), None, region=lumped))
-        jac = [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh), region=lumped)]
+        res.append(CellResidual(h.T, regional(heat_f0_capacity, hh), None, region=lumped))
+        jac = [CellJacobian(h.T, h.T, g0=regional(heat_g0_TT, hh), region=lumped)]
     else:
         jac = []
-    jac += [CellJacobian(h.T, h.T, g0=partial(heat_g0_TT, hh) if h.capacity and not h.lumped else None,
-                        g2=partial(heat_g2_TT, hh) if advect else None,
-                        g3=partial(heat_g3_TT, hh),
-                        g2_lap=partial(heat_g2lap_TT, hh) if supg and h.degree > 1 else None,
+    jac += [CellJacobian(h.T, h.T, g0=regional(heat_g0_TT, hh) if h.capacity and not h.lumped else None,
+                        g2=regional(heat_g2_TT, hh) if advect else None,
+                        g3=regional(heat_g3_TT, hh),
+                        g2_lap=regional(heat_g2lap_TT, hh) if supg and h.degree > 1 else None,
                         region=region)]
     if advect and h.flow is not None:
-        g2 = partial(heat_g2_Tp, hh) if supg and h.flow.storage else None
-        jac.append(CellJacobian(h.T, h.flow.p, g2=g2, g3=partial(heat_g3_Tp, hh), region=region))
+        g2 = regional(heat_g2_Tp, hh) if supg and h.flow.storage else None
+        jac.append(CellJacobian(h.T, h.flow.p, g2=g2, g3=regional(heat_g3_Tp, hh), region=region))
         if supg and h.biot:
-            jac.append(CellJacobian(h.T, h.biot[0], g3=partial(heat_g3_Tu, hh), region=region))
+            jac.append(CellJacobian(h.T, h.biot[0], g3=regional(heat_g3_Tu, hh), region=region))
     if supg and h.wall is not None:
-        jac += [CellJacobian(h.T, Adjacent(h.wall.field, s), g3=partial(heat_g3_wall, hh, s), region=region)
+        jac += [CellJacobian(h.T, Adjacent(h.wall.field, s), g3=regional(heat_g3_wall, hh, s), region=region)
                 for s in SIDES]
     if h.aperture is not None:
-        s0 = None if h.lumped else partial(heat_s0_aperture, hh)
-        jac += h.aperture.jacobians(h.T, s0, partial(heat_s1_aperture, hh))
+        s0 = None if h.lumped else regional(heat_s0_aperture, hh)
+        jac += h.aperture.jacobians(h.T, s0, regional(heat_s1_aperture, hh))
         if capacity:
-            jac += h.aperture.jacobians(h.T, partial(heat_s0_aperture, hh), None, lumped)
+            jac += h.aperture.jacobians(h.T, regional(heat_s0_aperture, hh), None, lumped)
     if h.upwind:
         limiter = FluxLimiter(settle=h.settle) if h.limited else None
         u = Upwinding(hh, heat_point, limiter)

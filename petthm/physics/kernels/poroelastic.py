@@ -34,20 +34,24 @@ from petthm.discretisation.model import (
     Side,
     Trace,
 )
+from petthm.physics.kernels.regional import Regional, at, regional
 
 
 @dataclass(frozen=True)
 class Elastic:
-    """Drained isotropic elasticity with Biot and thermal coupling."""
-    youngs_modulus: float
-    poisson_ratio: float
+    """Drained isotropic elasticity with Biot and thermal coupling.  The
+    moduli, the Biot coefficient and the expansion may be ``Regional``
+    (kernels/regional.py): the kernels see the values of each batch's
+    region; the derived moduli below are then those of one region."""
+    youngs_modulus: float | Regional
+    poisson_ratio: float | Regional
     dim: int
     u: str = "u"
     p: str | None = None           # pore pressure field (Biot coupling)
-    biot: float = 0.0
+    biot: float | Regional = 0.0
     p_ref: float | Callable = 0.0     # p0: a number or a function of position (points (n, d) -> (n,))
     T: str | None = None           # temperature field (thermal strain)
-    thermal_expansion: float = 0.0    # volumetric beta_s
+    thermal_expansion: float | Regional = 0.0    # volumetric beta_s
     T_ref: float | Callable = 0.0     # T0 (K): likewise
     body_force: tuple = ()            # F (N/m3), constant: -div sigma = F
     region: Region = MATRIX
@@ -96,7 +100,9 @@ def at_points(reference, ctx):
 
 def _stress_of(el: Elastic, ctx, G, p, T):
     """sigma from the displacement gradient G (nc, nq, d, d) and the pressure
-    and temperature references ``p``, ``T`` (None: not coupled)."""
+    and temperature references ``p``, ``T`` (None: not coupled), with the
+    moduli of the batch's region."""
+    el = at(el, ctx)
     eps = 0.5 * (G + np.swapaxes(G, 2, 3))
     iso = el.lame * np.trace(eps, axis1=2, axis2=3)
     if p is not None and el.biot:
@@ -115,8 +121,18 @@ def _g3_uu(el: Elastic, ctx):
     return el.stiffness()[None, None]
 
 
-def _g2_coupling(coef: float, dim: int, ctx):
+def _g2_coupling(coef: float, dim: int):
     return (-coef * np.eye(dim))[None, None, :, :, None]
+
+
+def _g2_biot(el: Elastic, ctx):
+    """d sigma/d p: -alpha I."""
+    return _g2_coupling(el.biot, el.dim)
+
+
+def _g2_thermal(el: Elastic, ctx):
+    """d sigma/d T: -K beta_s I."""
+    return _g2_coupling(el.bulk * el.thermal_expansion, el.dim)
 
 
 def _biot_f0(el: Elastic, ctx):
@@ -136,29 +152,28 @@ def _biot_g1(el: Elastic, ctx):
 
 def elastic_terms(el: Elastic) -> tuple[list, list]:
     """Momentum balance of ``el.u`` and the Biot term of the flow equation."""
-    res = [CellResidual(el.u, partial(_body_f0, el) if el.body_force else None, partial(stress, el),
+    res = [CellResidual(el.u, partial(_body_f0, el) if el.body_force else None, regional(stress, el),
                         region=el.region)]
-    jac = [CellJacobian(el.u, el.u, g3=partial(_g3_uu, el), region=el.region, constant=True)]
+    jac = [CellJacobian(el.u, el.u, g3=regional(_g3_uu, el), region=el.region, constant=True)]
     if el.p is not None and el.biot:
-        jac.append(CellJacobian(el.u, el.p, g2=partial(_g2_coupling, el.biot, el.dim), region=el.region,
-                                constant=True))
-        res.append(CellResidual(el.p, partial(_biot_f0, el), None, region=el.region))
-        jac.append(CellJacobian(el.p, el.u, g1=partial(_biot_g1, el), region=el.region))
+        jac.append(CellJacobian(el.u, el.p, g2=regional(_g2_biot, el), region=el.region, constant=True))
+        res.append(CellResidual(el.p, regional(_biot_f0, el), None, region=el.region))
+        jac.append(CellJacobian(el.p, el.u, g1=regional(_biot_g1, el), region=el.region))
     if el.T is not None and el.thermal_expansion:
-        jac.append(CellJacobian(el.u, el.T, g2=partial(_g2_coupling, el.bulk * el.thermal_expansion, el.dim),
-                                region=el.region, constant=True))
+        jac.append(CellJacobian(el.u, el.T, g2=regional(_g2_thermal, el), region=el.region, constant=True))
     return res, jac
 
 
-def _heating_rate(el: Elastic, p: str | None, porosity_expansion: float, ctx):
+def _heating_rate(el: Elastic, p: str | None, porosity_expansion, ctx):
     """beta_s K d(div u)/dt - phi beta_f dp/dt at the points (nc, nq), 1/s."""
+    el, porosity_expansion = at(el, ctx), at(porosity_expansion, ctx)
     r = el.bulk * el.thermal_expansion * np.trace(_grad_dot(ctx, el.u), axis1=2, axis2=3)
     if porosity_expansion and p is not None:
         r = r - porosity_expansion * ctx.dot(p)[..., 0]
     return r
 
 
-def heating_power(el: Elastic, T: str, p: str | None = None, porosity_expansion: float = 0.0):
+def heating_power(el: Elastic, T: str, p: str | None = None, porosity_expansion=0.0):
     """The heating of ``heating_terms`` as a power density (W/m3, positive
     where it heats): ``power(ctx)`` at the points (nc, nq), from the state's
     temperature (K) and rates."""
@@ -170,15 +185,15 @@ def heating_power(el: Elastic, T: str, p: str | None = None, porosity_expansion:
 
 
 def heating_terms(el: Elastic, T: str, p: str | None = None,
-                  porosity_expansion: float = 0.0) -> tuple[list, list]:
+                  porosity_expansion=0.0) -> tuple[list, list]:
     """Thermo-mechanical heating of theory manual, "Equations: rock heat" in the heat equation of ``T``:
 
         + beta_s K T d(div u)/dt - phi beta_f T dp/dt
 
     (T in kelvin; compression heats, expansion and pressure rise of the pore
     fluid cool).  ``porosity_expansion`` is phi beta_f (0 or no ``p``: the
-    strain term only).  Exact Jacobians with respect to T, u and p."""
-    bK = el.bulk * el.thermal_expansion
+    strain term only; a number or ``Regional``).  Exact Jacobians with
+    respect to T, u and p."""
     pe = porosity_expansion if p is not None else 0.0
     rate = partial(_heating_rate, el, p, pe)
 
@@ -189,11 +204,13 @@ def heating_terms(el: Elastic, T: str, p: str | None = None,
         return rate(ctx)[..., None, None]
 
     def g1_Tu(ctx):
+        e = at(el, ctx)
+        bK = e.bulk * e.thermal_expansion
         return (bK * ctx.shift * ctx.value(T)[..., 0])[..., None, None,
                                                        None] * np.eye(el.dim)[None, None, None]
 
     def g0_Tp(ctx):
-        return (-pe * ctx.shift * ctx.value(T)[..., 0])[..., None, None]
+        return (-at(pe, ctx) * ctx.shift * ctx.value(T)[..., 0])[..., None, None]
     res = [CellResidual(T, f0, None, region=el.region)]
     jac = [CellJacobian(T, T, g0=g0_TT, region=el.region), CellJacobian(T, el.u, g1=g1_Tu, region=el.region)]
     if pe:
@@ -217,11 +234,11 @@ def fixed_stress_terms(el: Elastic, p: str) -> list[CellJacobian]:
     A_pu = shift alpha (q, div du) (section 5), A_up = -alpha (div w, dp)
     (section 2), K_dr = lambda + 2 G / d the drained bulk modulus of the
     d-dimensional body (Kim, Tchelepi & Juanes 2011; the fixed-stress
-    split's stabilisation with the physical choice of its constant)."""
-    K_dr = el.lame + 2.0 * el.shear / el.dim
-    beta = el.biot ** 2 / K_dr
-
+    split's stabilisation with the physical choice of its constant), with
+    each region's moduli."""
     def g0(ctx):
+        e = at(el, ctx)
+        beta = e.biot ** 2 / (e.lame + 2.0 * e.shear / e.dim)
         return np.full(ctx.shape, beta * ctx.shift)[..., None, None]
     return [CellJacobian(p, p, g0=g0, region=el.region)]
 
@@ -230,13 +247,15 @@ def pressure_stabilisation_terms(el: Elastic, p: str, factor: float = 1.0) -> tu
     """Flow-equation perturbation tau int grad q . grad(dp/dt), tau = factor h^2 / (4 (lambda + 2G))
     (Aguilar, Gaspar, Lisbona & Rodrigo 2008): removes the non-physical pressure
     oscillations of the first steps when dt << h^2 / c; consistent to O(h^2)."""
-    tau0 = factor / (4 * (el.lame + 2 * el.shear))
+    def tau0(ctx):
+        e = at(el, ctx)
+        return factor / (4 * (e.lame + 2 * e.shear))
 
     def f1(ctx):
-        return tau0 * ctx.h[:, :, None, None] ** 2 * _grad_dot(ctx, p)
+        return tau0(ctx) * ctx.h[:, :, None, None] ** 2 * _grad_dot(ctx, p)
 
     def g3(ctx):
-        t = tau0 * ctx.h[:, 0] ** 2 * ctx.shift
+        t = tau0(ctx) * ctx.h[:, 0] ** 2 * ctx.shift
         return (t[:, None, None] * np.eye(el.dim))[:, None, None, :, None, :]
     return ([CellResidual(p, None, f1, region=el.region)],
             [CellJacobian(p, p, g3=g3, region=el.region)])

@@ -39,6 +39,7 @@ import numpy as np
 
 from petthm.discretisation.model import CellJacobian, CellResidual, Region
 from petthm.physics.kernels.flow import increment_product, water_content, water_content_rate
+from petthm.physics.kernels.regional import at, regional
 
 
 @dataclass(frozen=True)
@@ -96,7 +97,7 @@ def _element(u: Upwinding, ctx) -> _Element:
 def upwinding_diffusion(u: Upwinding, ctx):
     """The upwinding's d_ij and T_i - T_j on the cells, unlimited (nc, nb, nb):
     what the limiter corrects."""
-    e = _Element(u, ctx, limited=False)
+    e = _Element(at(u, ctx), ctx, limited=False)
     return e.D, e.dT, e.T
 
 
@@ -151,15 +152,13 @@ def upwinding_terms(u: Upwinding) -> tuple[list, list]:
         raise ValueError("algebraic upwinding needs P1 temperatures (and the P1 pressure that advects them)")
     region = Region(h.region)
     pre = u.limiter
-    res = [CellResidual(h.T, None, None, region=region, element=lambda ctx: upwinding_residual(u, ctx),
-                        prepare=pre)]
-    jac = [CellJacobian(h.T, h.T, region=region, element=lambda ctx: upwinding_TT(u, ctx), prepare=pre)]
+    res = [CellResidual(h.T, None, None, region=region, element=regional(upwinding_residual, u), prepare=pre)]
+    jac = [CellJacobian(h.T, h.T, region=region, element=regional(upwinding_TT, u), prepare=pre)]
     if h.flow is not None:
-        jac.append(CellJacobian(h.T, h.flow.p, region=region, element=lambda ctx: upwinding_Tp(u, ctx),
-                                prepare=pre))
+        jac.append(CellJacobian(h.T, h.flow.p, region=region, element=regional(upwinding_Tp, u), prepare=pre))
     if h.aperture is not None:
         jac += [replace(j, prepare=pre) for j in
-                h.aperture.element_jacobians(h.T, lambda ctx: upwinding_aperture(u, ctx), region)]
+                h.aperture.element_jacobians(h.T, regional(upwinding_aperture, u), region)]
     return res, jac
 
 
@@ -251,11 +250,11 @@ def stored_water_aperture(w: StoredWater, ctx):
 def stored_water_terms(w: StoredWater) -> tuple[list, list]:
     h, fl = w.heat, w.flow
     region = Region(h.region)
-    res = [CellResidual(h.T, None, None, region=region, element=lambda ctx: stored_water_residual(w, ctx))]
-    jac = [CellJacobian(h.T, h.T, region=region, element=lambda ctx: stored_water_TT(w, ctx)),
-           CellJacobian(h.T, fl.p, region=region, element=lambda ctx: stored_water_Tp(w, ctx))]
+    res = [CellResidual(h.T, None, None, region=region, element=regional(stored_water_residual, w))]
+    jac = [CellJacobian(h.T, h.T, region=region, element=regional(stored_water_TT, w)),
+           CellJacobian(h.T, fl.p, region=region, element=regional(stored_water_Tp, w))]
     if w.biot:
-        jac.append(CellJacobian(h.T, w.biot[0], region=region, element=lambda ctx: stored_water_Tu(w, ctx)))
+        jac.append(CellJacobian(h.T, w.biot[0], region=region, element=regional(stored_water_Tu, w)))
     if fl.aperture is not None:
-        jac += fl.aperture.element_jacobians(h.T, lambda ctx: stored_water_aperture(w, ctx), region)
+        jac += fl.aperture.element_jacobians(h.T, regional(stored_water_aperture, w), region)
     return res, jac
