@@ -45,6 +45,7 @@ def main() -> None:
         rows.append(("coupled deck, 2 ranks vs 1", f"{key} relative difference",
                      abs(two[key] - one[key]) / abs(one[key])))
     rows += layered_rows(out, meshes)
+    rows += well_rows(out)
     print("| deck | measure | measured |\n|---|---|---|")
     for deck, measure, value in rows:
         print(f"| {deck} | {measure} | {value:.2g} |")
@@ -70,6 +71,25 @@ def layered_rows(out, meshes) -> list:
     for key in ("u_max", "pm_change_max", "Tm_change_max"):
         rows.append(("two layers, coupled, 2 ranks vs 1", f"{key} relative difference",
                      abs(two[key] - one[key]) / abs(one[key])))
+    return rows
+
+
+def well_rows(out) -> list:
+    """The wells: the water balance of an injector, a schedule, 2 ranks against 1."""
+    meshes = decks.well_meshes(out)
+    rows = [("injector through two layers, closed box, 3D P1", "stored / injected - 1",
+             decks.injected_water_error(out / "well_balance", meshes[3]))]
+    one, s = decks.two_wells(out / "wells_one", meshes[2])
+    rows.append(("2D injector turning producer at 5e5 s, producer at 1 MPa", "Tm beyond [20, 80] degC (K)",
+                 s["bounds"]["Tm"]["violation"]))
+    two, _ = decks.two_wells(out / "wells_two", meshes[2], ranks=2)
+    for key in ("well_inj_pressure", "well_prod_rate", "well_inj_temperature"):
+        a, b = float(one[-1][key]), float(two[-1][key])
+        rows.append(("the same, 2 ranks vs 1", f"{key} relative difference", abs(b - a) / abs(a)))
+    for h in (50.0, 25.0, 12.5):
+        far, well = decks.thiem_errors(out / f"thiem{h:g}", h)
+        rows += [(f"well in a disc, h = {h:g} m", "max abs(p - Thiem) / Thiem(r_w), 50 m < r < 450 m", far),
+                 (f"well in a disc, h = {h:g} m", "bottom-hole pressure / Thiem(r_w) - 1", well)]
     return rows
 
 

@@ -129,6 +129,39 @@ class PointTerm:
     jacobian: Kernel
 
 
+@dataclass(frozen=True)
+class NodeSetTerm:
+    """Residual terms at a set of nodes coupled through sums over the whole
+    set (a well whose bottom-hole pressure ties its perforated nodes:
+    theory manual, "Equations: wells").
+
+    ``points`` (n, d) are the nodes' positions (mesh vertices), the same list
+    on every rank; ``fields`` the fields the term reads and adds to at them.
+    ``residual(ctx)`` returns {field: (m,)} for the m nodes this rank owns
+    (``NodeSetContext``); ``jacobian(ctx)`` returns {(test, trial): values}
+    for each block of ``blocks``: (test, trial, "diagonal") holds the
+    derivative of a node's row by its own value, (m,); (test, trial,
+    "dense") by every node's value, (m, n).  Both are collective (they may
+    call ``ctx.total``) and are called on every rank, with m = 0 too."""
+    name: str
+    points: np.ndarray
+    fields: tuple
+    blocks: tuple
+    residual: Kernel
+    jacobian: Kernel
+
+
+class NodeSetContext(Protocol):
+    """What a ``NodeSetTerm`` sees: ``values`` {field: (m,) SI values at the
+    owned nodes}, ``owned`` (m,) their positions in the term's list, ``t``,
+    and ``total(a)``: the sum of ``a`` over the ranks (collective)."""
+    values: dict
+    owned: np.ndarray
+    t: float
+
+    def total(self, a) -> np.ndarray: ...
+
+
 #: the residual and Jacobian registrations of one physical term
 Terms = tuple[list, list]
 
@@ -198,6 +231,7 @@ class Model:
     jacobians: list[CellJacobian] = field(default_factory=list)
     facets: list[FacetTerm] = field(default_factory=list)
     points: list[PointTerm] = field(default_factory=list)
+    node_sets: list[NodeSetTerm] = field(default_factory=list)
     ties: dict = field(default_factory=dict)      # {matrix field: fracture field}
     bounds: dict = field(default_factory=dict)    # {field: (lower, upper)} SI, None: unbounded
     preconditioner: list[CellJacobian] = field(default_factory=list)

@@ -26,6 +26,7 @@ from petthm.discretisation.assembly import Assembler, FieldScale
 from petthm.discretisation.constraints import Constraints, Dirichlet
 from petthm.discretisation.fields import Discretisation, Domain, base_field
 from petthm.discretisation.model import Model, PointTerm, Region
+from petthm.discretisation.nodesets import NodeSetDofs
 
 
 @dataclass(frozen=True)
@@ -53,6 +54,7 @@ class Problem:
                                         inv_rscale=self.inv_rscale)
                            for r in model.regions()}
         self.points = [PointDofs(disc, pt) for pt in model.points]
+        self.node_sets = [NodeSetDofs(disc, ns) for ns in model.node_sets]
         self.X = self.dm.createGlobalVec()
         self.X.setName("solution")
         self.constraints = Constraints(disc, dirichlet, self.X)
@@ -229,6 +231,9 @@ class Problem:
             if p.dofs and field in p.dofs:
                 q = -p.term.residual(p.values(xl, self.scales), t).get(field, 0.0)
                 net, tot = net + q, tot + abs(q)
+        for ns in self.node_sets:
+            q, a = ns.inflow(xl, t, self.scales, field)
+            net, tot = net + q, tot + a
         return tuple(float(v) for v in self.dm.comm.tompi4py().allreduce(np.array([net, tot])))
 
     # -- evaluation ------------------------------------------------------------------------
@@ -239,7 +244,7 @@ class Problem:
         r = asm[0].residual(xl, xdl, t, shift)
         for a in asm[1:]:
             r += a.residual(xl, xdl, t, shift)
-        for p in self.points:
+        for p in self.points + self.node_sets:
             p.add_residual(r, xl, t, self.scales, self.inv_rscale)
         return r
 
@@ -289,8 +294,8 @@ class Problem:
     def jacobian_values(self, xl, xdl, t, shift) -> np.ndarray:
         """The COO values of the Jacobian in ``create_matrix``'s order, in one
         buffer kept across calls (each assembler writes its own slice)."""
-        sizes = [a.nnz for a in self.assemblers.values()] + [len(p.coo_rows) for p in self.points] + \
-            [len(self._diagonal)]
+        sizes = [a.nnz for a in self.assemblers.values()] + \
+            [len(p.coo_rows) for p in self.points + self.node_sets] + [len(self._diagonal)]
         if self._jvals is None or self._jvals.size != sum(sizes):
             self._jvals = np.empty(sum(sizes))
             self._jvals_constant = False
@@ -300,7 +305,7 @@ class Problem:
                               keep_constant=self._jvals_constant)
             pos += a.nnz
         self._jvals_constant = True
-        for p in self.points:
+        for p in self.points + self.node_sets:
             v = p.jacobian_values(xl, t, self.scales, self.inv_rscale)
             self._jvals[pos:pos + v.size] = v
             pos += v.size
@@ -330,7 +335,8 @@ class Problem:
         """The Jacobian matrix (created once, with its COO pattern)."""
         if self.J is None:
             rows, cols = self._coo_pattern(list(self.assemblers.values()), [(p.coo_rows, p.coo_cols)
-                                           for p in self.points] + [(self._diagonal, self._diagonal)])
+                                           for p in self.points + self.node_sets] +
+                                           [(self._diagonal, self._diagonal)])
             self.J = compat.coo_matrix(self.dm, rows, cols, copy=False)
         return self.J
 

@@ -376,7 +376,7 @@ class ModelBuilder:
         source (the manufactured solutions) has its range reported without
         bounds."""
         given = [getattr(self.p, f.name) + CELSIUS for f in dataclasses.fields(self.p)
-                 if f.metadata.get("unit") == "degC"]
+                 if f.metadata.get("unit") == "degC" and isinstance(getattr(self.p, f.name), (int, float))]
         out = {}
         for h in self.heats.values():
             if h.source is not None or not given:

@@ -1,7 +1,8 @@
 """Command line of the deck geometry tool (manual: user guide, decks):
 
     python -m petthm.run.deckbox --lower 0,0,-3000 --upper 2000,2000,-1000 --size 200 \\
-        --layers granite:-2000,sandstone:-1000 --out reservoir.msh
+        --layers granite:-2000,sandstone:-1000 --well inj:1000,1000,-2800/1000,1000,-1200 \\
+        --out reservoir.msh
 
 writes the mesh (``deckmesh.layered_deck_box``: named layers, faces west,
 east, south, north, bottom, top) and beside it a starter options file
@@ -36,11 +37,21 @@ def _layers(text: str) -> list[tuple[str, float]]:
     return out
 
 
-def starter_options(mesh: str, boundaries, regions) -> str:
+def _well(text: str) -> tuple[str, list]:
+    """NAME:x,y,z/x,y,z/... (3D: a polyline of two points or more; 2D: points)."""
+    name, _, rest = text.partition(":")
+    points = [_numbers(p, f"--well {text}") for p in rest.split("/") if p]
+    if not name or not points:
+        raise InputError(f"--well = {text}: NAME:x,y,z/x,y,z/... (the well's name and its points)")
+    return name, points
+
+
+def starter_options(mesh: str, boundaries, regions, wells=()) -> str:
     """An options file for a deck on ``mesh``: the mesh, gravity, the
-    initial state, and every boundary's options commented out."""
+    initial state, and every boundary's and region's options commented out."""
     import dataclasses
 
+    from petthm.scenes.deckinput import REGION_FIELDS
     from petthm.scenes.reservoir import BoundaryValues
     lines = [f"# a deck on {os.path.basename(mesh)} (regions: {', '.join(regions)}); "
              "python -m petthm reservoir -options_file THIS_FILE",
@@ -51,6 +62,13 @@ def starter_options(mesh: str, boundaries, regions) -> str:
         lines.append(f"# boundary {name}")
         lines += [f"# -thm_bc_{name}_{f.name} VALUE    ({f.metadata['unit']}: {f.metadata['help']})"
                   for f in dataclasses.fields(BoundaryValues)]
+    for name in regions:
+        lines.append(f"# region {name} (default: the global -thm_rock_* values)")
+        lines += [f"# -thm_region_{name}_{f} VALUE" for f in REGION_FIELDS]
+    if wells:
+        lines.append(f"# -thm_wells {','.join(wells)}")
+    for name in wells:
+        lines.append(f"# -thm_well_{name}_rate Q   (or _pressure P; _times, _temperature, _radius)")
     return "\n".join(lines) + "\n"
 
 
@@ -61,6 +79,8 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=float, required=True, help="mesh size (m)")
     ap.add_argument("--layers", default="", help="NAME:TOP,... from the bottom up (default: one region rock)")
     ap.add_argument("--rotation", type=float, default=0.0, help="turn the mesh about the vertical (degrees)")
+    ap.add_argument("--well", action="append", default=[],
+                    help="NAME:x,y,z/x,y,z/... a well (3D: a polyline; 2D: points), repeated for more")
     ap.add_argument("--out", required=True,
                     help="the mesh file to write (.msh); the options beside it (.opts)")
     args = ap.parse_args(argv)
@@ -72,14 +92,17 @@ def main(argv=None) -> int:
         layers = _layers(args.layers)
         if not args.out.endswith(".msh"):
             raise InputError(f"--out = {args.out}: a .msh file")
-        layered_deck_box(args.out, lower, upper, args.size, layers, rotation=args.rotation)
+        wells = [_well(w) for w in args.well]
+        if any(len(p) != len(lower) for _, pts in wells for p in pts):
+            raise InputError(f"--well: points of {len(lower)} coordinates, as --lower")
+        layered_deck_box(args.out, lower, upper, args.size, layers, rotation=args.rotation, wells=wells)
     except InputError as e:
         print(f"petthm: error: {e}", file=sys.stderr)
         return 2
     faces = (FACE_NAMES_3D if len(lower) == 3 else FACE_NAMES_2D).values()
     opts = os.path.splitext(args.out)[0] + ".opts"
     with open(opts, "w") as f:
-        f.write(starter_options(args.out, faces, [n for n, _ in layers] or ["rock"]))
+        f.write(starter_options(args.out, faces, [n for n, _ in layers] or ["rock"], [n for n, _ in wells]))
     print(f"wrote {args.out} and {opts}")
     return 0
 

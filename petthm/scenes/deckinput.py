@@ -20,8 +20,7 @@ from petthm.physics import materials as mt
 #: the fields a deck may have (rock only)
 DECK_FIELDS = ("u", "pm", "Tm")
 #: what a deck cannot hold yet: the option prefixes and what they would set
-NOT_YET = {"thm_fracture_": "fractures", "thm_fractures": "fractures", "thm_well_": "wells",
-           "thm_wells": "wells"}
+NOT_YET = {"thm_fracture_": "fractures", "thm_fractures": "fractures"}
 #: the rock properties a region may give (-thm_region_NAME_rock_*, ../shared/docs/reservoir.md section 2)
 REGION_FIELDS = mt.ELASTIC + ("rock_biot_coefficient", "rock_density", "rock_heat_capacity",
                               "rock_conductivity", "rock_thermal_expansion", "rock_porosity",
@@ -36,6 +35,11 @@ class DeckParams:
                         kind=DISCRETISATION)
     fe_degree_flow: int = param(0, "-", "degree of pm and Tm (0: P1 with P2 u, else -thm_fe_degree)",
                                 choices=(0, 1, 2), kind=DISCRETISATION)
+    wells: str = param("", "-", "the wells, a comma list of the names of the mesh's groups of dimension 1 "
+                       "(3D) or 0 (2D): -thm_well_NAME_* (manual: decks, wells)", kind=PHYSICS)
+    power_reference_temperature: str = param("", "degC", "T_ref of a producer's thermal power rho_f C_f Q "
+                                             "(T - T_ref) (default: the lowest injection temperature)",
+                                             kind=PHYSICS)
     equilibrium_tolerance: float = param(1e-6, "-", "the largest imbalance div sigma0 + rho_b g of the "
                                          "in-situ stress accepted, relative to rho_b g (without gravity: "
                                          "to the stress's largest value over the domain's extent)",
@@ -58,6 +62,23 @@ class BoundaryValues:
     traction: str = param("", "Pa", "total traction tx,ty[,tz] on the boundary", kind=PHYSICS)
 
 
+@dataclass(frozen=True)
+class WellValues:
+    """The control of one named well: ``-thm_well_NAME_SUFFIX``, read by
+    ``params.read_named`` (kind ``well``)."""
+    rate: str = param("", "m3/s", "volume rate into the rock (> 0 injects, < 0 produces; 2D: per metre); a "
+                      "comma list with _times is a schedule", kind=PHYSICS)
+    pressure: str = param("", "Pa", "bottom-hole pressure at the well's shallowest node instead of a rate "
+                          "(a list with _times likewise)", kind=PHYSICS)
+    times: str = param("", "s", "the times the schedule's values start, 0 first, increasing", kind=PHYSICS)
+    temperature: str = param("", "degC", "temperature of the injected water", kind=PHYSICS)
+    radius: float = param(0.0, "m", "well radius r_w of the well index (0: -thm_well_radius)", lo=0.0,
+                          kind=PHYSICS)
+
+
+WELL_SUFFIXES = tuple(f.name for f in dataclasses.fields(WellValues))
+
+
 #: the field each boundary value acts on
 BC_FIELD = {"pressure": "pm", "temperature": "Tm", "flux": "pm", "heat_flux": "Tm",
             "normal_displacement": "u", "displacement": "u", "normal_stress": "u", "traction": "u"}
@@ -71,6 +92,7 @@ class DeckGroups:
     dim: int
     regions: tuple
     boundaries: tuple
+    points: tuple = ()           # groups of dimension d - 2: the wells a deck may name in -thm_wells
 
     def region_of_tag(self, tag: int) -> str:
         return next((g.name for g in self.regions if g.tag == tag), f"tag {tag}")
@@ -98,9 +120,11 @@ def classify(groups, path: str) -> DeckGroups:
                          "deck's regions are groups of dimension 2 (plane strain) or 3")
     regions = tuple(g for g in groups if g.dim == dim)
     boundaries = tuple(g for g in groups if g.dim == dim - 1)
-    kinds = {g.name: "region" for g in regions} | {g.name: "bc" for g in boundaries}
-    mg.check_names(regions + boundaries, kinds=kinds)
-    return DeckGroups(dim, regions, boundaries)
+    points = tuple(g for g in groups if g.dim == dim - 2)
+    kinds = {g.name: "region" for g in regions} | {g.name: "bc" for g in boundaries} | \
+        {g.name: "well" for g in points}
+    mg.check_names(regions + boundaries + points, kinds=kinds)
+    return DeckGroups(dim, regions, boundaries, points)
 
 
 def check_not_yet(options=None) -> None:
@@ -111,21 +135,27 @@ def check_not_yet(options=None) -> None:
         low = key.lower()
         for prefix, what in NOT_YET.items():
             if low.startswith(prefix):
-                raise InputError(f"option -{key}: {what} are not part of a reservoir deck yet (the rock "
-                                 "takes the global -thm_rock_* values; fractures and wells: the paper's "
-                                 "scenes)")
+                raise InputError(f"option -{key}: {what} are not part of a reservoir deck yet (fractured "
+                                 "rock: the paper's scenes rigid_fracture, penny_impermeable, "
+                                 "inclined_penny)")
 
 
-def unknown_named_options(groups: DeckGroups, options=None) -> None:
-    """An input error for a -thm_bc_NAME_* (-thm_region_NAME_*) option whose
-    NAME is not a boundary (region) of the mesh, or whose suffix is not one a
-    boundary (region) takes."""
+def unknown_named_options(groups: DeckGroups, known=(), options=None) -> None:
+    """An input error for a -thm_bc_NAME_* (-thm_region_NAME_*,
+    -thm_well_NAME_*) option whose NAME is not a boundary (region, well
+    group) of the mesh, or whose suffix is not one a boundary (region,
+    well) takes; ``known``: global options under those prefixes
+    (``-thm_well_radius``)."""
     from petsc4py import PETSc
     opts = options or PETSc.Options()
+    known = {k.lower() for k in known}
     kinds = (("bc", "boundary", "boundaries", groups.boundaries, BC_SUFFIXES),
-             ("region", "region", "regions", groups.regions, REGION_FIELDS))
+             ("region", "region", "regions", groups.regions, REGION_FIELDS),
+             ("well", "well", "wells", groups.points, WELL_SUFFIXES))
     for key in sorted(opts.getAll()):
         low = key.lower()
+        if low in known:
+            continue
         for kind, what, plural, named, suffixes in kinds:
             if low.startswith(f"thm_{kind}_"):
                 _check_named_option(key, low[len(kind) + 5:], what, plural, [g.name for g in named], suffixes)

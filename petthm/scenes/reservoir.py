@@ -26,8 +26,13 @@ What a deck holds here:
   the global value where a region gives none; every kernel takes each
   cell's region's values (kernels/regional.py).
 
-Fractures and wells are not part of a deck yet: their options are refused
-with an error that says so.
+* wells (``-thm_wells``, ``-thm_well_NAME_*``, ``WellValues``): named
+  polylines (3D) or points (2D) of the mesh, each with one bottom-hole
+  pressure, at a rate or a pressure by a piecewise-constant schedule
+  (physics/linewells.py; ``deckwells.py`` makes them from the options).
+
+Fractures are not part of a deck yet: their options are refused with an
+error that says so.
 """
 from __future__ import annotations
 
@@ -48,14 +53,18 @@ from petthm.params import CELSIUS
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels.regional import per_region
+from petthm.physics.linewells import well_term
+from petthm.scenes import deckwells as dw
 from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults
 from petthm.scenes.deckinput import (
     BC_FIELD,
     BC_SUFFIXES,
     DECK_FIELDS,
     REGION_FIELDS,
+    WELL_SUFFIXES,
     BoundaryValues,
     DeckParams,
+    WellValues,
     check_not_yet,
     classify,
     corners,
@@ -72,10 +81,12 @@ from petthm.solvers.options import direct_solver_defaults
 class DeckMonitor(Monitor):
     """How far the deck has moved from its initial state: the largest
     displacement (m) and the largest change of pm (Pa) and Tm (K) over the
-    nodes, per step (beside the field ranges of ``run.ranges``)."""
+    nodes, per step (beside the field ranges of ``run.ranges``); and each
+    well's rate, pressure, temperature and power (``deckwells.well_columns``)."""
 
-    def __init__(self, fields, initial):
+    def __init__(self, fields, initial, wells=(), power_reference: float = 0.0):
         self.fields, self.initial = fields, initial
+        self.wells, self.power_reference = list(wells), power_reference
         self.last = {}
 
     def __call__(self, problem, t, X=None):
@@ -87,6 +98,8 @@ class DeckMonitor(Monitor):
         for name in ("pm", "Tm"):
             if name in self.fields:
                 out[f"{name}_change_max"] = probes.max_nodal_error(problem, name, self.initial[name], X, t)
+        for w in self.wells:
+            out.update(dw.well_columns(problem, w, t, X, self.power_reference))
         self.last = out
         return out
 
@@ -106,6 +119,7 @@ class Reservoir(Scene):
         mt.group("Initial state", ("initial_temperature", "initial_pressure", "insitu_stress"),
                  insitu_stress="0"),
         mt.group("Gravity", ("gravity",), gravity=0.0),
+        mt.group("Wells", ("well_radius",)),
         mt.group("Coupling", ("thermomechanical_heating",)),
         mt.group("Heat transport", mt.HEAT_DISCRETISATION),
         DeckParams)
@@ -120,6 +134,9 @@ class Reservoir(Scene):
                    for g in self.groups.boundaries}
         #: the parameters of each region, in the order of the mesh's regions (-thm_region_NAME_rock_*)
         self.rocks = {g.name: P.read_named(p, REGION_FIELDS, "region", g.name) for g in self.groups.regions}
+        #: the wells' controls (-thm_wells, -thm_well_NAME_*)
+        self.wells = dw.well_controls(p, self.groups)
+        self.history_columns = type(self).history_columns + dw.history_columns(self.wells)
 
     def parameter_sets(self):
         """The run's and the deck's parameters, the boundaries' values
@@ -130,6 +147,8 @@ class Reservoir(Scene):
                   for name, values in self.bc.items() for f in dataclasses.fields(BoundaryValues)]
         fields += [_named_field("region", name, by_name[f], getattr(rock, f))
                    for name, rock in self.rocks.items() for f in REGION_FIELDS]
+        fields += [_named_field("well", name, f, getattr(values, f.name))
+                   for name, values in self.wells.items() for f in dataclasses.fields(WellValues)]
         return (self.run, self.p, dataclasses.make_dataclass("Named", fields, frozen=True)())
 
     @classmethod
@@ -137,26 +156,32 @@ class Reservoir(Scene):
         from petsc4py import PETSc
         check_not_yet()
         groups = deck_groups(run.mesh_file, PETSc.COMM_WORLD.tompi4py())
-        unknown_named_options(groups)
+        unknown_named_options(groups, known=P.known_options(cls.parameters))
         return (P.named_options(BoundaryValues, BC_SUFFIXES, "bc", [g.name for g in groups.boundaries]) |
-                {P.named_option("region", g.name, f) for f in REGION_FIELDS for g in groups.regions})
+                {P.named_option("region", g.name, f) for f in REGION_FIELDS for g in groups.regions} |
+                P.named_options(WellValues, WELL_SUFFIXES, "well", [g.name for g in groups.points]))
 
     @classmethod
     def named_help(cls, mesh_file):
-        """The -thm_bc_NAME_* options of the mesh's boundaries and the
-        -thm_region_NAME_rock_* of its regions (rank 0 alone: -help)."""
+        """The -thm_bc_NAME_* options of the mesh's boundaries, the
+        -thm_region_NAME_rock_* of its regions and the -thm_well_NAME_* of its
+        wells' groups (rank 0 alone: -help)."""
         bc = P.help_text((BoundaryValues,)).split("\n")[1:]
+        well = P.help_text((WellValues,)).split("\n")[1:]
         rock = [line for line in P.help_text((cls.parameters[0],)).split("\n")[1:]
                 if line.split()[0][len("-thm_"):] in REGION_FIELDS]
         if not mesh_file:
             return "\n".join(["  Boundaries (give -thm_mesh_file F.msh to list them for its boundaries)"] +
                              [line.replace("-thm_", "-thm_bc_<NAME>_", 1) for line in bc] +
                              ["  Regions (default: the global value)"] +
-                             [line.replace("-thm_", "-thm_region_<NAME>_", 1) for line in rock])
+                             [line.replace("-thm_", "-thm_region_<NAME>_", 1) for line in rock] +
+                             ["  Wells (named in -thm_wells)"] +
+                             [line.replace("-thm_", "-thm_well_<NAME>_", 1) for line in well])
         groups = classify(mg.read_physical_names(mesh_file), mesh_file)
         lines = []
         for kind, what, named, options in (("bc", "Boundary", groups.boundaries, bc),
-                                           ("region", "Region", groups.regions, rock)):
+                                           ("region", "Region", groups.regions, rock),
+                                           ("well", "Well", groups.points, well)):
             for g in named:
                 lines.append(f"  {what} {g.name} of {mesh_file}")
                 lines += [line.replace("-thm_", f"-thm_{kind}_{g.name.lower()}_", 1) for line in options]
@@ -255,12 +280,24 @@ class Reservoir(Scene):
             b.matrix_heat(fd)
             b.model.ranges["Tm"] = temperatures
         b.model.facets.extend(facets)
+        if self.wells:
+            self.line_wells = dw.line_wells(self, mesh, fields)
+            b.model.node_sets.extend(well_term(w) for w in self.line_wells)
         model = b.build()
         if len(set(map(_rock_values, self.rocks.values()))) > 1:
             model.cell_regions = self.cell_regions(mesh)
         init = {"u": lambda x: np.zeros((len(x), dim)), "pm": p0, "Tm": T0}
         return Setup(model, bcs, self.scales(mesh, fields, temperatures), {f: init[f] for f in fields},
-                     DeckMonitor(fields, init))
+                     DeckMonitor(fields, init, getattr(self, "line_wells", []), self.power_reference()))
+
+    def hit_times(self) -> list[float]:
+        """The times of the wells' schedules: the steps land on them."""
+        return dw.schedule_times(self.wells)
+
+    def power_reference(self) -> float:
+        """T_ref of the producers' thermal power (K): -thm_power_reference_temperature,
+        else the lowest injection temperature (else 0 degC)."""
+        return dw.power_reference(self.p, self.wells)
 
     def rock_parameters(self, dim: int) -> tuple:
         """(global parameters, dim, each region's parameters) of the model
@@ -447,6 +484,7 @@ class Reservoir(Scene):
             if bv.temperature:
                 pts = mesh.point_coordinates(mesh.label_points(name, 0))
                 values.append(Expression(bv.temperature, f"-thm_bc_{name}_temperature", mesh.dim)(pts))
+        values += [np.array([float(w.temperature)]) for w in self.wells.values() if w.temperature]
         v = np.concatenate(values)
         comm = mesh.dm.comm
         return Range(probes.global_min(comm, v) + CELSIUS, probes.global_max(comm, v) + CELSIUS)

@@ -45,7 +45,7 @@ def _error(tmp_path, *options):
     (("-thm_region_granite_rock_permeability", 0, "-thm_region_granite_rock_porosity", 0,
       "-thm_region_granite_rock_biot_coefficient", 1, *HOLD),
      ("region granite", "pressure is undetermined")),
-    (("-thm_wells", "inj"), ("-thm_wells", "wells are not part")),
+    (("-thm_wells", "inj"), ("-thm_wells = inj", "no group 'inj' of dimension 1", "none")),
     (("-thm_bc_top_pressure", "(-z)*rho"), ("-thm_bc_top_pressure", "the name 'rho'", "accepted")),
     (("-thm_initial_temperature", "20+__import__(1)"), ("-thm_initial_temperature", "__import__",
                                                         "not accepted")),
@@ -64,6 +64,28 @@ def _error(tmp_path, *options):
 def test_a_bad_deck_is_one_line_naming_what_is_wrong(tmp_path, box, options, words):
     first = () if options == () else ("-thm_mesh_file", box)
     msg = _error(tmp_path, *first, *options)
+    assert all(w in msg for w in words), msg
+
+
+@pytest.fixture(scope="module")
+def wellbox(tmp_path_factory):
+    return layered_deck_box(str(tmp_path_factory.mktemp("deckwell") / "wb.msh"), [0, 0, -300], [300, 300, 0],
+                            150, wells=[("inj", [(150, 150, -250), (150, 150, -50)])])
+
+
+@pytest.mark.parametrize("options,words", [
+    (("-thm_wells", "inj"), ("well inj", "either -thm_well_inj_rate or -thm_well_inj_pressure")),
+    (("-thm_wells", "inj", "-thm_well_inj_rate", "0.01,0"), ("-thm_well_inj_times", "one time per value")),
+    (("-thm_wells", "inj", "-thm_well_inj_rate", "0.01,0", "-thm_well_inj_times", "5,10"),
+     ("increasing times from 0",)),
+    (("-thm_wells", "inj", "-thm_well_inj_rate", 0.01, *HOLD), ("well inj injects",
+                                                                 "-thm_well_inj_temperature")),
+    (("-thm_well_inj_rate", 0.01), ("-thm_well_inj_rate", "not in -thm_wells")),
+    (("-thm_well_inx_rate", 0.01), ("no well 'inx'", "did you mean inj?")),
+    (("-thm_wells", "inj", "-thm_well_inj_pressure", 1e6, "-thm_fields", "Tm"), ("needs pm",)),
+])
+def test_a_bad_well_is_one_line_naming_what_is_wrong(tmp_path, wellbox, options, words):
+    msg = _error(tmp_path, "-thm_mesh_file", wellbox, *options)
     assert all(w in msg for w in words), msg
 
 
@@ -126,10 +148,11 @@ def test_the_geometry_tool_writes_a_mesh_and_a_starter_deck(tmp_path):
                               capture_output=True, text=True)
     out = tmp_path / "res.msh"
     proc = tool("--lower", "0,-300", "--upper", "300,0", "--size", "100",
-                "--layers", "granite:-150,sandstone:0", "--out", str(out))
+                "--layers", "granite:-150,sandstone:0", "--well", "inj:150,-200", "--out", str(out))
     assert proc.returncode == 0, proc.stderr
     opts = (tmp_path / "res.opts").read_text()
     assert f"-thm_mesh_file {out}" in opts and "# -thm_bc_top_temperature VALUE" in opts
+    assert "# -thm_region_granite_rock_permeability VALUE" in opts and "# -thm_wells inj" in opts
     _, s = run_petthm("reservoir", tmp_path / "run", "-options_file", tmp_path / "res.opts",
                       "-thm_gravity", 0, "-thm_fields", "Tm", "-thm_bc_top_temperature", 10,
                       "-ts_max_steps", 2, check=False)

@@ -310,3 +310,139 @@ def test_one_rank_equals_two_on_layers_of_different_rock(tmp_path, meshes):
     one, two = ranks_changes(tmp_path, meshes[3], *SANDSTONE, *GRANITE, *anisotropic(3))
     for key in ("u_max", "pm_change_max", "Tm_change_max"):
         assert two[key] == pytest.approx(one[key], rel=1e-8), key
+
+
+# -- wells ----------------------------------------------------------------------------------------
+def well_meshes(folder) -> dict:
+    """The two layers with a vertical well through both (3D), and a 2D section with two point wells."""
+    layers = [("granite", -200.0), ("sandstone", 0.0)]
+    return {3: layered_deck_box(str(folder / "well3.msh"), [0, 0, -400], [400, 400, 0], 100, layers,
+                                wells=[("inj", [(200, 200, -350), (200, 200, -50)])]),
+            2: layered_deck_box(str(folder / "well2.msh"), [0, -400], [400, 0], 20, layers,
+                                wells=[("inj", [(200, -100)]), ("prod", [(350, -300)])])}
+
+
+@pytest.fixture(scope="module")
+def wmeshes(tmp_path_factory):
+    return well_meshes(tmp_path_factory.mktemp("wells"))
+
+
+def injected_water_error(outdir, mesh) -> float:
+    """A rate-controlled injector (0.01 m3/s of 20 degC water into rock at
+    80 degC) through both layers of a closed box for 1e6 s: the water the
+    two rocks store, int S dp - phi beta_f dT with each region's S and phi,
+    over the water injected, less one."""
+    from petthm.io.output import read_cell_regions
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "pm,Tm",
+                      "-thm_fe_degree", 1, *SANDSTONE, *GRANITE, *anisotropic(3),
+                      "-thm_wells", "inj", "-thm_well_inj_rate", 0.01,
+                      "-thm_well_inj_temperature", 20, "-thm_initial_temperature", 80,
+                      "-thm_final_time", 1e6, "-thm_dt_initial", 1e5)
+    assert s["status"] == "completed"
+    x, cells, t, fields = read_output(str(outdir / "fields.h5"))
+    granite = read_cell_regions(str(outdir)) == 1
+    corners = x[cells]
+    edges = corners[:, 1:] - corners[:, :1]
+    volume = np.abs(np.linalg.det(edges)) / 6
+
+    def storage(phi, alpha, E, nu):
+        return phi * 4.5e-10 + (alpha - phi) * (1 - alpha) / (E / (3 * (1 - 2 * nu)))
+    S = np.where(granite, storage(0.01, 0.5, 60e9, 0.2), storage(0.2, 0.9, 20e9, 0.3))
+    B = np.where(granite, 0.01, 0.2) * 2.07e-4
+    dp, dT = fields["pm"].ravel(), fields["Tm"].ravel() - 80.0
+    stored = np.sum(volume * (S * dp[cells].mean(axis=1) - B * dT[cells].mean(axis=1)))
+    return stored / (0.01 * t) - 1.0
+
+
+def two_wells(outdir, mesh, ranks=1) -> tuple:
+    """The 2D section (k = 1e-12 m2): an injector of 20 degC water into rock
+    at 80 degC, 1e-4 m3/s (per metre), that turns producer at 5e6 s, and a
+    producer at a bottom-hole pressure of 1 MPa below the initial 2 MPa;
+    (history rows, summary)."""
+    import csv
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fields", "pm,Tm",
+                      "-thm_fe_degree", 1, "-thm_wells", "inj,prod", "-thm_well_inj_rate", "1e-4,-1e-4",
+                      "-thm_well_inj_times", "0,5e6", "-thm_rock_permeability", 1e-12,
+                      "-thm_well_inj_temperature", 20, "-thm_well_prod_pressure", 1e6,
+                      "-thm_initial_temperature", 80, "-thm_initial_pressure", 2e6, "-thm_rock_porosity", 0.1,
+                      "-thm_final_time", 1e7, "-thm_dt_initial", 5e5, ranks=ranks)
+    assert s["status"] == "completed"
+    with open(outdir / "history.csv") as f:
+        return list(csv.DictReader(f)), s
+
+
+def test_an_injector_through_two_layers_stores_what_it_injects(tmp_path, wmeshes):
+    """One bottom-hole pressure for the well's nodes in two rocks; the
+    water balance is exact (no other inflow or outflow)."""
+    assert abs(injected_water_error(tmp_path, wmeshes[3])) < 1e-9
+
+
+def test_a_schedule_switches_the_rate_at_its_time_and_temperatures_stay_in_bounds(tmp_path, wmeshes):
+    """The steps land on 5e6 s; the injector's rate is 1e-4 up to it and
+    -1e-4 after; the producer's pressure is its 1 MPa; Tm stays within
+    [T_inj, T0] (the bound-preserving transport with the wells' enthalpy)."""
+    rows, s = two_wells(tmp_path, wmeshes[2])
+    times = [float(r["time"]) for r in rows]
+    assert 5e6 in times
+    for r, t in zip(rows, times, strict=True):
+        assert float(r["well_inj_rate"]) == (1e-4 if t <= 5e6 else -1e-4)
+        assert float(r["well_prod_pressure"]) == 1e6
+    assert float(rows[1]["well_prod_rate"]) < 0 and float(rows[-1]["well_inj_power"]) > 0
+    assert s["bounds"]["Tm"]["violation_fraction"] <= 1e-6
+
+
+def test_wells_on_two_ranks_equal_one(tmp_path, wmeshes):
+    one, _ = two_wells(tmp_path / "one", wmeshes[2])
+    two, _ = two_wells(tmp_path / "two", wmeshes[2], ranks=2)
+    for key in ("well_inj_pressure", "well_prod_rate", "well_inj_temperature"):
+        assert float(two[-1][key]) == pytest.approx(float(one[-1][key]), rel=1e-8), key
+
+
+def disc_with_a_well(path: str, h: float, R: float = 500.0) -> str:
+    """A 2D disc of radius R (region rock, boundary outer) with a point well at its centre."""
+    from petthm.mesh.generate import _start, _write
+    gmsh = _start("disc")
+    occ = gmsh.model.occ
+    _, pieces = occ.fragment([(2, occ.addDisk(0, 0, 0, R, R))], [(0, occ.addPoint(0, 0, 0))])
+    occ.synchronize()
+    gmsh.model.addPhysicalGroup(2, [e[1] for e in pieces[0] if e[0] == 2], 1, name="rock")
+    gmsh.model.addPhysicalGroup(1, [e[1] for e in gmsh.model.getEntities(1)], 2, name="outer")
+    gmsh.model.addPhysicalGroup(0, [e[1] for e in pieces[1]], 3, name="well")
+    gmsh.option.setNumber("Mesh.MeshSizeMin", h)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+    return _write(gmsh, 2, path)
+
+
+def thiem_errors(outdir, h: float) -> tuple[float, float]:
+    """A well at the centre of a disc (R = 500 m, k = 1e-14 m2) takes
+    1e-4 m3/s per metre, the rim held at p = 0; in steady state Thiem's
+    p(r) = Q mu / (2 pi k) ln(R / r).  (The largest error of p at
+    50 m < r < 450 m, and the bottom-hole pressure's, both relative to
+    Thiem's pressure at the well's radius r_w = 0.1 m.)"""
+    import csv
+    import math
+    outdir.mkdir(parents=True, exist_ok=True)
+    mesh = disc_with_a_well(str(outdir / "disc.msh"), h)
+    _, s = run_petthm("reservoir", outdir / "run", "-thm_mesh_file", mesh, "-thm_fields", "pm",
+                      "-thm_fe_degree", 1, "-thm_wells", "well", "-thm_well_well_rate", 1e-4,
+                      "-thm_bc_outer_pressure", 0, *STEADY,
+                      "-thm_final_time", 2e10, "-thm_dt_max", 1e10)
+    assert s["status"] == "completed"
+    x, p = final(outdir / "run", "pm")
+    r = np.linalg.norm(x, axis=1)
+
+    def thiem(radius):
+        return 1e-4 * 1e-3 / (2 * math.pi * 1e-14) * np.log(500.0 / radius)
+    far = (r > 50) & (r < 450)
+    with open(outdir / "run" / "history.csv") as f:
+        pw = float(list(csv.DictReader(f))[-1]["well_well_pressure"])
+    return (float(np.max(np.abs(p.ravel()[far] - thiem(r[far]))) / thiem(0.1)),
+            float(pw / thiem(0.1) - 1.0))
+
+
+def test_a_well_in_a_disc_draws_thiem_s_pressure(tmp_path):
+    """The pressure away from the well converges to Thiem's (h = 50 m:
+    4e-3, 25 m: 4e-4 of the well's drawdown); the bottom-hole pressure
+    through Peaceman's index is within a few per cent of Thiem's at r_w."""
+    far, well = thiem_errors(tmp_path, 25.0)
+    assert far < 1e-3 and abs(well) < 0.05

@@ -1,0 +1,166 @@
+"""A deck's wells (``../shared/docs/reservoir.md`` sections 2 and 3; manual:
+user guide, decks, "Wells"): the controls read from ``-thm_wells`` and
+``-thm_well_NAME_*`` and checked, the ``LineWell`` of each from its mesh
+group (``mesh/wellpaths.py``) and the rock around it, and its columns of
+``history.csv``."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from petthm import params as P
+from petthm.errors import InputError
+from petthm.params import CELSIUS
+from petthm.physics import linewells as lw
+from petthm.scenes.deckinput import WELL_SUFFIXES, WellValues
+
+
+@dataclass(frozen=True)
+class Control:
+    """A well's parsed control: a rate or a pressure schedule, the injected
+    temperature (degC, None: not given) and the radius (m)."""
+    rate: lw.Schedule | None
+    pressure: lw.Schedule | None
+    temperature: float | None
+    radius: float
+
+
+def well_controls(p, groups) -> dict:
+    """{name: WellValues} of the wells of -thm_wells, each checked
+    (``control``); an error for a name that is no group of dimension d - 2 of
+    the mesh, and for options of a group not in -thm_wells."""
+    from petsc4py import PETSc
+    names = [s.strip() for s in p.wells.split(",") if s.strip()]
+    groups_by_name = {g.name.lower(): g for g in groups.points}
+    listed = set()
+    out = {}
+    for name in names:
+        g = groups_by_name.get(name.lower())
+        if g is None:
+            known = [g.name for g in groups.points]
+            raise InputError(f"option -thm_wells = {p.wells}: the mesh has no group '{name}' of dimension "
+                             f"{groups.dim - 2}{P.did_you_mean(name, known)} (its groups of dimension "
+                             f"{groups.dim - 2}: {', '.join(known) or 'none'})")
+        values = P.read_named(WellValues(), WELL_SUFFIXES, "well", g.name)
+        control(g.name, values, p)
+        out[g.name] = values
+        listed.add(g.name.lower())
+    for key in PETSc.Options().getAll():
+        low = key.lower()
+        for g in groups.points:
+            if low.startswith(f"thm_well_{g.name.lower()}_") and g.name.lower() not in listed:
+                raise InputError(f"option -{key}: well {g.name} is not in -thm_wells (give -thm_wells "
+                                 f"{','.join(names + [g.name])})")
+    return out
+
+
+def _numbers(text: str, option: str) -> tuple:
+    try:
+        return tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise InputError(f"option {option} = {text}: numbers, a comma list for a schedule") from None
+
+
+def control(name: str, v: WellValues, p) -> Control:
+    """The parsed, checked control of well ``name``."""
+    prefix = f"-thm_well_{name}_"
+    if bool(v.rate) == bool(v.pressure):
+        raise InputError(f"well {name}: give either {prefix}rate or {prefix}pressure (one control per well)")
+    kind = "rate" if v.rate else "pressure"
+    values = _numbers(getattr(v, kind), prefix + kind)
+    times = _numbers(v.times, prefix + "times") if v.times else (0.0,) if len(values) == 1 else ()
+    if len(times) != len(values):
+        raise InputError(f"option {prefix}times = {v.times or '(none)'}: one time per value of "
+                         f"{prefix}{kind} ({len(values)})")
+    if times[0] != 0.0 or any(b <= a for a, b in zip(times, times[1:], strict=False)):
+        raise InputError(f"option {prefix}times = {v.times}: increasing times from 0")
+    schedule = lw.Schedule(times, values)
+    temperature = _numbers(v.temperature, prefix + "temperature")[0] if v.temperature else None
+    radius = v.radius or p.well_radius
+    return Control(schedule if kind == "rate" else None, schedule if kind == "pressure" else None,
+                   temperature, radius)
+
+
+def history_columns(wells: dict) -> tuple:
+    """The columns of ``history.csv`` of each well (reservoir.md section 3)."""
+    return tuple(f"well_{name}_{what}" for name in wells
+                 for what in ("rate", "pressure", "temperature", "power"))
+
+
+def schedule_times(wells: dict) -> list[float]:
+    times = set()
+    for v in wells.values():
+        if v.times:
+            times |= {t for t in _numbers(v.times, "") if t > 0}
+    return sorted(times)
+
+
+def power_reference(p, wells: dict) -> float:
+    """T_ref of a producer's thermal power (K)."""
+    if p.power_reference_temperature:
+        return _numbers(p.power_reference_temperature, "-thm_power_reference_temperature")[0] + CELSIUS
+    given = [_numbers(v.temperature, "")[0] for v in wells.values() if v.temperature]
+    return (min(given) if given else 0.0) + CELSIUS
+
+
+def line_wells(scene, mesh, fields) -> list[lw.LineWell]:
+    """The ``LineWell`` of each of the scene's wells (collective)."""
+    from petthm.mesh.wellpaths import read_well_paths
+    p, groups = scene.p, scene.groups
+    if "pm" not in fields:
+        raise InputError(f"option -thm_wells = {p.wells}: a well in the rock needs pm (its fields: "
+                         f"{', '.join(fields)})")
+    wanted = [g for g in groups.points if g.name in scene.wells]
+    paths = read_well_paths(scene.run.mesh_file, mesh.dim, wanted, groups.regions, mesh.dm.comm.tompi4py())
+    K = [scene.permeability(name, mesh.dim) for name in scene.rocks]
+    heat = "Tm" in fields
+    out = []
+    for path in paths:
+        c = control(path.name, scene.wells[path.name], p)
+        if heat and c.rate is not None and max(c.rate.values) > 0 and c.temperature is None:
+            raise InputError(f"well {path.name} injects (-thm_well_{path.name}_rate > 0): give "
+                             f"-thm_well_{path.name}_temperature")
+        out.append(_line_well(scene, path, c, K, heat))
+    return out
+
+
+def _line_well(scene, path, c: Control, K, heat: bool) -> lw.LineWell:
+    p = scene.p
+    across = np.array([[lw.permeability_across(k, None if path.direction is None else path.direction[i])
+                        for k in K] for i in range(len(path.points))])
+    k_perp = np.sum(path.regions * across, axis=1)
+    mu = np.broadcast_to(p.fluid_viscosity.mu(scene.initial_temperature()(path.points)), k_perp.shape)
+    index = lw.well_index(k_perp, path.length, path.edge, c.radius, mu)
+    z = path.points[:, -1]
+    head = p.fluid_density * p.gravity * (z.max() - z)
+    return lw.LineWell(path.name, path.points, index, head, rate=c.rate, pressure=c.pressure,
+                       temperature=None if c.temperature is None else c.temperature + CELSIUS,
+                       rho_c=p.fluid_rho_c if heat else 0.0, T="Tm" if heat else None)
+
+
+def well_columns(problem, w: lw.LineWell, t: float, X, power_reference: float) -> dict:
+    """A well's rate (m3/s into the rock), bottom-hole pressure (Pa), the
+    temperature of its water (degC: injected, or the produced mix) and
+    produced thermal power (W) at the state X (collective)."""
+    ns = next(n for n in problem.node_sets if n.term.name == w.name)
+    xl, _ = problem.local_arrays(X or problem.X, t)
+    ctx = ns.context(xl, t, problem.scales)
+    s = lw.state(w, ctx)
+    T = ctx.values[w.T] if w.T is not None else np.zeros_like(s.q)
+    out_of_rock = s.q < 0
+    sums = ctx.total([s.q.sum(), (s.q * T)[out_of_rock].sum(), s.q[out_of_rock].sum()])
+    Q = float(sums[0])
+    name = f"well_{w.name}"
+    row = {f"{name}_rate": Q, f"{name}_pressure": s.pressure, f"{name}_temperature": float("nan"),
+           f"{name}_power": 0.0}
+    if w.T is None:
+        return row
+    if Q > 0 and w.temperature is not None:
+        row[f"{name}_temperature"] = w.temperature - CELSIUS
+    elif sums[2] < 0:
+        produced = float(sums[1] / sums[2])
+        row[f"{name}_temperature"] = produced - CELSIUS
+        if Q < 0:
+            row[f"{name}_power"] = w.rho_c * abs(Q) * (produced - power_reference)
+    return row
