@@ -35,7 +35,6 @@ well-bore pressure unknown per well (a later option, manual, Scene 3).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,6 +44,7 @@ from petthm.discretisation.model import PointTerm
 from petthm.errors import InputError
 from petthm.params import CELSIUS
 from petthm.physics.kernels import wells as wl
+from petthm.physics.linewells import well_index
 
 
 @dataclass(frozen=True)
@@ -128,9 +128,8 @@ def interval_nodes(mesh, perf: Perforation) -> list[Node]:
 def line_well_index(permeability: float, length: float, h: float, well_radius: float, mu: float) -> float:
     """PI (m3/(s Pa)) of a node carrying ``length`` of a well in a rock of
     permeability k across the well: 2 pi k l / (mu ln(r_e/r_w)), r_e = 0.2 h
-    (floored at 2 r_w)."""
-    re = max(0.2 * h, 2.0 * well_radius)
-    return 2.0 * math.pi * permeability * length / (mu * math.log(re / well_radius))
+    (floored at 2 r_w): ``linewells.well_index``."""
+    return float(well_index(permeability, length, h, well_radius, mu))
 
 
 @dataclass

@@ -139,6 +139,23 @@ def _line_well(scene, path, c: Control, K, heat: bool) -> lw.LineWell:
                        rho_c=p.fluid_rho_c if heat else 0.0, T="Tm" if heat else None)
 
 
+def not_liquid(name: str, columns: dict, t: float) -> str | None:
+    """What is wrong where a well's bottom-hole pressure (absolute) holds no
+    liquid water at its water's temperature (``well_columns``), or None."""
+    from petthm.physics.fluid import ATMOSPHERE, liquid_range
+    p_abs = columns[f"well_{name}_pressure"] + ATMOSPHERE
+    T = columns[f"well_{name}_temperature"]
+    bounds = liquid_range(p_abs)
+    if bounds is None and p_abs > 611.2128:              # above region 1's 100 MPa: not a boiling well
+        return None
+    if bounds is not None and (not np.isfinite(T) or bounds[0] < T < bounds[1]):
+        return None
+    water = f"water at {T:.4g} degC" if np.isfinite(T) else "water"
+    return (f"at t = {t:.4g} s well {name}'s bottom-hole pressure is {p_abs / 1e6:.4g} MPa absolute, where "
+            f"{water} is not liquid: the model has no steam; its results there are not physical (lower "
+            f"-thm_well_{name}_rate or raise its pressure)")
+
+
 def well_columns(problem, w: lw.LineWell, t: float, X, power_reference: float) -> dict:
     """A well's rate (m3/s into the rock), bottom-hole pressure (Pa), the
     temperature of its water (degC: injected, or the produced mix) and

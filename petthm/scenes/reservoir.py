@@ -37,6 +37,7 @@ error that says so.
 from __future__ import annotations
 
 import dataclasses
+import sys
 
 import numpy as np
 
@@ -87,6 +88,7 @@ class DeckMonitor(Monitor):
     def __init__(self, fields, initial, wells=(), power_reference: float = 0.0):
         self.fields, self.initial = fields, initial
         self.wells, self.power_reference = list(wells), power_reference
+        self.warned: set[str] = set()
         self.last = {}
 
     def __call__(self, problem, t, X=None):
@@ -99,9 +101,22 @@ class DeckMonitor(Monitor):
             if name in self.fields:
                 out[f"{name}_change_max"] = probes.max_nodal_error(problem, name, self.initial[name], X, t)
         for w in self.wells:
-            out.update(dw.well_columns(problem, w, t, X, self.power_reference))
+            columns = dw.well_columns(problem, w, t, X, self.power_reference)
+            out.update(columns)
+            self.check_water(problem, w, t, columns)
         self.last = out
         return out
+
+    def check_water(self, problem, w, t: float, columns: dict) -> None:
+        """Once per well, a warning where its bottom-hole pressure leaves
+        liquid water (the model has one phase; ``deckwells.not_liquid``)."""
+        if w.name in self.warned:
+            return
+        message = dw.not_liquid(w.name, columns, t)
+        if message:
+            self.warned.add(w.name)
+            if problem.dm.comm.getRank() == 0:
+                print(f"warning: {message}", file=sys.stderr, flush=True)
 
     def report(self, problem, t):
         return {"change": dict(self.last)}

@@ -446,3 +446,18 @@ def test_a_well_in_a_disc_draws_thiem_s_pressure(tmp_path):
     through Peaceman's index is within a few per cent of Thiem's at r_w."""
     far, well = thiem_errors(tmp_path, 25.0)
     assert far < 1e-3 and abs(well) < 0.05
+
+
+@pytest.mark.parametrize("rate,warned", [(-1e-4, True), (-1e-6, False)])
+def test_a_well_that_draws_its_pressure_below_boiling_is_reported(tmp_path, wmeshes, rate, warned):
+    """A producer at 1e-4 m3/s per metre from rock of 1e-14 m2 draws its
+    bottom-hole pressure below the vapour pressure of 80 degC water: one
+    warning naming the well (the model has one phase); at 1e-6 m3/s none."""
+    proc, s = run_petthm("reservoir", tmp_path, "-thm_mesh_file", wmeshes[2], "-thm_fields", "pm,Tm",
+                         "-thm_fe_degree", 1, "-thm_wells", "prod", "-thm_well_prod_rate", rate,
+                         "-thm_initial_temperature", 80, "-thm_initial_pressure", 2e6,
+                         "-thm_final_time", 1e6, "-thm_dt_initial", 2.5e5)
+    assert s["status"] == "completed"
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("warning:") and "well prod" in line]
+    assert len(lines) == (1 if warned else 0), proc.stderr
+    assert not warned or "is not liquid" in lines[0]
