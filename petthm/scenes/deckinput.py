@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from petthm import params as P
 from petthm.discretisation import probes
 from petthm.errors import InputError
 from petthm.expressions import Expression, split_list, values_at
@@ -238,3 +239,19 @@ def first_not_liquid(option: str, temps, p_gauge, points) -> str | None:
         except InputError as e:
             return str(e)
     return None
+
+
+def bulk_density(q) -> float:
+    """rho_b = (1 - phi) rho_s + phi rho_f of a region's parameters."""
+    return (1 - q.rock_porosity) * q.rock_density + q.rock_porosity * q.fluid_density
+
+
+def rock_values(q) -> tuple:
+    """A region's rock properties, comparable (``REGION_FIELDS``)."""
+    return tuple(getattr(q, f) for f in REGION_FIELDS)
+
+
+def named_field(kind: str, name: str, f: dataclasses.Field, value) -> tuple:
+    """A field of the dataclass of a named group's values (``parameter_sets``)."""
+    option = P.named_option(kind, name, f.name)
+    return (option, type(value), dataclasses.field(default=value, metadata={**f.metadata, "option": option}))

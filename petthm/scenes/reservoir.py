@@ -37,7 +37,6 @@ error that says so.
 from __future__ import annotations
 
 import dataclasses
-import sys
 
 import numpy as np
 
@@ -56,7 +55,7 @@ from petthm.physics.builders import ModelBuilder
 from petthm.physics.kernels.regional import per_region
 from petthm.physics.linewells import well_term
 from petthm.scenes import deckwells as dw
-from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults
+from petthm.scenes.base import Scene, Setup, TimeDefaults
 from petthm.scenes.deckinput import (
     BC_FIELD,
     BC_SUFFIXES,
@@ -66,6 +65,7 @@ from petthm.scenes.deckinput import (
     BoundaryValues,
     DeckParams,
     WellValues,
+    bulk_density,
     check_not_yet,
     classify,
     corners,
@@ -73,53 +73,13 @@ from petthm.scenes.deckinput import (
     domain_extent,
     first_not_liquid,
     insitu_tensor,
+    named_field,
+    rock_values,
     unknown_named_options,
     vector_expressions,
 )
+from petthm.scenes.deckmonitor import DeckMonitor
 from petthm.solvers.options import direct_solver_defaults
-
-
-class DeckMonitor(Monitor):
-    """How far the deck has moved from its initial state: the largest
-    displacement (m) and the largest change of pm (Pa) and Tm (K) over the
-    nodes, per step (beside the field ranges of ``run.ranges``); and each
-    well's rate, pressure, temperature and power (``deckwells.well_columns``)."""
-
-    def __init__(self, fields, initial, wells=(), power_reference: float = 0.0):
-        self.fields, self.initial = fields, initial
-        self.wells, self.power_reference = list(wells), power_reference
-        self.warned: set[str] = set()
-        self.last = {}
-
-    def __call__(self, problem, t, X=None):
-        out = {}
-        if "u" in self.fields:
-            v = problem.field_values("u", X, t)
-            size = np.linalg.norm(v, axis=1) if len(v) else v[:, 0]
-            out["u_max"] = probes.global_max(problem.dm.comm, size, empty=0.0)
-        for name in ("pm", "Tm"):
-            if name in self.fields:
-                out[f"{name}_change_max"] = probes.max_nodal_error(problem, name, self.initial[name], X, t)
-        for w in self.wells:
-            columns = dw.well_columns(problem, w, t, X, self.power_reference)
-            out.update(columns)
-            self.check_water(problem, w, t, columns)
-        self.last = out
-        return out
-
-    def check_water(self, problem, w, t: float, columns: dict) -> None:
-        """Once per well, a warning where its bottom-hole pressure leaves
-        liquid water (the model has one phase; ``deckwells.not_liquid``)."""
-        if w.name in self.warned:
-            return
-        message = dw.not_liquid(w.name, columns, t)
-        if message:
-            self.warned.add(w.name)
-            if problem.dm.comm.getRank() == 0:
-                print(f"warning: {message}", file=sys.stderr, flush=True)
-
-    def report(self, problem, t):
-        return {"change": dict(self.last)}
 
 
 class Reservoir(Scene):
@@ -158,11 +118,11 @@ class Reservoir(Scene):
         (-thm_bc_NAME_*) and the regions' rock (-thm_region_NAME_rock_*): a
         restart keeps them, as every physics option."""
         by_name = {f.name: f for f in dataclasses.fields(self.p)}
-        fields = [_named_field("bc", name, f, getattr(values, f.name))
+        fields = [named_field("bc", name, f, getattr(values, f.name))
                   for name, values in self.bc.items() for f in dataclasses.fields(BoundaryValues)]
-        fields += [_named_field("region", name, by_name[f], getattr(rock, f))
+        fields += [named_field("region", name, by_name[f], getattr(rock, f))
                    for name, rock in self.rocks.items() for f in REGION_FIELDS]
-        fields += [_named_field("well", name, f, getattr(values, f.name))
+        fields += [named_field("well", name, f, getattr(values, f.name))
                    for name, values in self.wells.items() for f in dataclasses.fields(WellValues)]
         return (self.run, self.p, dataclasses.make_dataclass("Named", fields, frozen=True)())
 
@@ -299,7 +259,7 @@ class Reservoir(Scene):
             self.line_wells = dw.line_wells(self, mesh, fields)
             b.model.node_sets.extend(well_term(w) for w in self.line_wells)
         model = b.build()
-        if len(set(map(_rock_values, self.rocks.values()))) > 1:
+        if len(set(map(rock_values, self.rocks.values()))) > 1:
             model.cell_regions = self.cell_regions(mesh)
         init = {"u": lambda x: np.zeros((len(x), dim)), "pm": p0, "Tm": T0}
         return Setup(model, bcs, self.scales(mesh, fields, temperatures), {f: init[f] for f in fields},
@@ -447,7 +407,7 @@ class Reservoir(Scene):
             step = np.zeros(dim)
             step[j] = delta
             div += (S(x + step)[:, :, j] - S(x - step)[:, :, j]) / (2 * delta)
-        densities = np.array([_bulk_density(q) for q in self.rocks.values()])
+        densities = np.array([bulk_density(q) for q in self.rocks.values()])
         rho_b = densities[self.cell_regions(mesh)]
         div[:, -1] += rho_b * p.gravity
         largest = probes.global_max(comm, np.abs(S(x)), empty=0.0)
@@ -520,22 +480,6 @@ class Reservoir(Scene):
         strain = max(strains + [1e-6])
         out["u"] = FieldScale(strain * extent)
         return {f: out[f] for f in fields}
-
-
-def _bulk_density(q) -> float:
-    """rho_b = (1 - phi) rho_s + phi rho_f of a region's parameters."""
-    return (1 - q.rock_porosity) * q.rock_density + q.rock_porosity * q.fluid_density
-
-
-def _rock_values(q) -> tuple:
-    """A region's rock properties, comparable (``REGION_FIELDS``)."""
-    return tuple(getattr(q, f) for f in REGION_FIELDS)
-
-
-def _named_field(kind: str, name: str, f: dataclasses.Field, value) -> tuple:
-    """A field of the dataclass of a named group's values (``parameter_sets``)."""
-    option = P.named_option(kind, name, f.name)
-    return (option, type(value), dataclasses.field(default=value, metadata={**f.metadata, "option": option}))
 
 
 def _at_facets(e: Expression, ctx) -> np.ndarray:
