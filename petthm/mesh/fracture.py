@@ -144,17 +144,23 @@ class SplitInfo:
     normal: np.ndarray
 
 
-def split_fractures(dm: PETSc.DMPlex) -> tuple[PETSc.DMPlex, list[SplitInfo]]:
-    """Insert cohesive cells along every fracture of a serial DM (collective;
-    all the mesh lives on rank 0).  Returns the split DM and per-fracture info."""
+def split_fractures(dm: PETSc.DMPlex, fracture_tags=None) -> tuple[PETSc.DMPlex, list[SplitInfo]]:
+    """Insert cohesive cells along the fractures of a serial DM (collective;
+    all the mesh lives on rank 0): the "Face Sets" values ``fracture_tags``
+    (None: every value from ``FRACTURE_TAG0`` up).  Returns the split DM and
+    per-fracture info; fracture k (in the order of the tags) is labelled
+    ``thm_fracture_k``."""
     infos = []
     if not dm.hasLabel(FACE_SETS):
         return dm, infos
-    tags = sorted(int(v) for v in dm.getLabel(FACE_SETS).getValueIS().getIndices()
-                  if v >= FRACTURE_TAG0) if dm.comm.rank == 0 else []
-    tags = dm.comm.tompi4py().bcast(tags, root=0)
-    for tag in tags:
-        dm, info = _split_one(dm, tag)
+    if fracture_tags is None:
+        tags = sorted(int(v) for v in dm.getLabel(FACE_SETS).getValueIS().getIndices()
+                      if v >= FRACTURE_TAG0) if dm.comm.rank == 0 else []
+        tags = dm.comm.tompi4py().bcast(tags, root=0)
+    else:
+        tags = [int(t) for t in fracture_tags]
+    for k, tag in enumerate(tags):
+        dm, info = _split_one(dm, tag, k)
         infos.append(info)
     if tags:
         _label_minus_faces(dm)
@@ -180,10 +186,10 @@ def _label_minus_faces(dm: PETSc.DMPlex) -> None:
             both.setValue(int(p), 1)
 
 
-def _split_one(dm: PETSc.DMPlex, tag: int):
+def _split_one(dm: PETSc.DMPlex, tag: int, k: int):
     dim = dm.getDimension()
     facets = _stratum(dm, FACE_SETS, tag)
-    name = f"thm_fracture_{tag - FRACTURE_TAG0}"
+    name = f"thm_fracture_{k}"
     dm.createLabel(name)
     frac = dm.getLabel(name)
     for f in facets:

@@ -156,7 +156,7 @@ class Run:
         with self._user_mesh_fits(dm.getDimension()):
             scene.label_mesh(dm)
         from petthm.mesh.fracture import split_fractures
-        dm, _ = split_fractures(dm)
+        dm, _ = split_fractures(dm, scene.fracture_tags())
         dm = distribute(dm)
         check_every_rank_has_cells(dm)
         mesh = Mesh(dm)

@@ -303,6 +303,12 @@ class Scene:
         from petthm.mesh.plex import label_boundaries
         label_boundaries(dm, self.boundaries())
 
+    def fracture_tags(self) -> tuple[int, ...] | None:
+        """The "Face Sets" values of the mesh's fractures, split into cohesive
+        cells (manual: theory, "Unknowns"); None: every value from
+        ``FRACTURE_TAG0`` (10) up, the numbering of the scenes' own meshes."""
+        return None
+
     def generate_mesh(self, path: str, size: float) -> str:
         raise NotImplementedError
 

@@ -168,6 +168,12 @@ class Reservoir(Scene):
     def mesh_dimension(self):
         return self.groups.dim, ""
 
+    def fracture_tags(self) -> tuple[int, ...]:
+        """None of the mesh's groups is split: a deck's boundaries and
+        regions keep their faces whatever their tags (fractures are not
+        part of a deck yet)."""
+        return ()
+
     def water_temperatures(self):
         """None before the mesh: a deck's temperatures are checked at the nodes (``check_water``)."""
         return []

@@ -461,3 +461,13 @@ def test_a_well_that_draws_its_pressure_below_boiling_is_reported(tmp_path, wmes
     lines = [line for line in proc.stderr.splitlines() if line.startswith("warning:") and "well prod" in line]
     assert len(lines) == (1 if warned else 0), proc.stderr
     assert not warned or "is not liquid" in lines[0]
+
+
+def test_a_mesh_of_ten_groups_or_more_keeps_every_boundary_whole(tmp_path):
+    """Groups numbered 10 and up are regions and boundaries like any other
+    (gmsh numbers groups in the order they are made): eight layers and four
+    faces give the top face tag 12, and the column still becomes hydrostatic
+    with its top held at p = 0."""
+    layers = [(f"layer{k}", -1000.0 + 125.0 * (k + 1)) for k in range(8)]
+    mesh = layered_deck_box(str(tmp_path / "eight.msh"), [0, -1000], [200, 0], 125, layers)
+    assert hydrostatic_error(tmp_path / "run", mesh, 2, 1) < 1e-10
