@@ -1,5 +1,6 @@
-"""The decks of tests/verification/test_reservoir.py with their measured
-errors, printed as the table of the manual (user guide, decks: "How well").
+"""The decks of tests/verification/test_reservoir.py and
+test_deck_fractures.py with their measured errors, printed as the tables
+of the manual (user guide, decks: "How well").
 
     python benchmarks/studies/deck_verification.py [--out DIR]
 """
@@ -13,6 +14,7 @@ import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "tests" / "verification")]
+import test_deck_fractures as fractured  # noqa: E402
 import test_reservoir as decks  # noqa: E402
 
 
@@ -46,9 +48,10 @@ def main() -> None:
                      abs(two[key] - one[key]) / abs(one[key])))
     rows += layered_rows(out, meshes)
     rows += well_rows(out)
+    rows += fracture_rows(out)
     print("| deck | measure | measured |\n|---|---|---|")
     for deck, measure, value in rows:
-        print(f"| {deck} | {measure} | {value:.2g} |")
+        print(f"| {deck} | {measure} | {value if isinstance(value, str) else f'{value:.2g}'} |")
 
 
 def layered_rows(out, meshes) -> list:
@@ -90,6 +93,31 @@ def well_rows(out) -> list:
         far, well = decks.thiem_errors(out / f"thiem{h:g}", h)
         rows += [(f"well in a disc, h = {h:g} m", "max abs(p - Thiem) / Thiem(r_w), 50 m < r < 450 m", far),
                  (f"well in a disc, h = {h:g} m", "bottom-hole pressure / Thiem(r_w) - 1", well)]
+    return rows
+
+
+
+def fracture_rows(out) -> list:
+    """The fractured decks and the heat that water carries across a boundary."""
+    crossing = fractured.layered_deck_box(str(out / "crossing.msh"), [0, -100], [200, 0], 20,
+                                          fractures=[("crack", [(0, -50), (200, -50)])])
+    rows = []
+    for fields in ("pf", "pm,pf"):
+        ef, em = fractured.linear_pressure_errors(out / f"linear_{fields.replace(',', '')}", crossing, fields)
+        rows.append((f"fracture between held pressures, fields {fields}, 2D P1",
+                     "max abs(p - linear) / 1 MPa: pf, pm", f"{ef:.2g}, {em:.2g}"))
+        ef, em = fractured.hydrostatic_fracture_errors(out / f"inclined_{fields.replace(',', '')}", fields)
+        rows.append((f"inclined fracture under gravity, fields {fields}, 2D P1",
+                     "max abs(p - rho_f g depth) / (rho_f g 200 m): pf, pm", f"{ef:.2g}, {em:.2g}"))
+    upper, lower, apart = fractured.aperture_differences(out / "apertures")
+    rows.append(("two fractures, the lower with its own aperture",
+                 "max abs(pf - the deck of one aperture) / 1 MPa: upper, lower; the two apertures' apart",
+                 f"{upper:.2g}, {lower:.2g}; {apart:.2g}"))
+    for what, value in fractured.fractured_heat_checks(out / "heat", crossing).items():
+        rows.append(("cold water through a fracture and the rock (pm, pf, Tm, Tf), 2D P1", what, value))
+    lowest, highest, last = fractured.flux_outflow_temperatures(out / "outflow", crossing)
+    rows.append(("water drawn out through a flux boundary, its temperature free", "Tm lowest, highest over "
+                 "the steps; highest at the end (degC)", f"{lowest:.6g}, {highest:.6g}; {last:.6g}"))
     return rows
 
 

@@ -89,8 +89,8 @@ class Assembler(Functionals):
                            [t for t in model.jacobians if t.region == region],
                            model.facets if region == MATRIX else [])
         self.mesh = disc.regions[self.base]
-        #: the rock region of each cell (None: one rock, or the fracture's faces)
-        self.cell_regions = model.cell_regions if self.base == MATRIX.domain else None
+        #: the rock region of each cell, or the fracture of each fracture face (None: one set of values)
+        self.cell_regions = model.cell_regions if self.base == MATRIX.domain else model.fracture_regions
         self._region_batches = None
         self.scales = scales
         self.inv_rscale = inv_rscale if inv_rscale is not None else self.default_inv_rscale(disc, scales)

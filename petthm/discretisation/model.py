@@ -250,6 +250,9 @@ class Model:
     #: the rock region of each local cell (an index into the values of the
     #: kernels' ``Regional`` coefficients, kernels/regional.py); None: one rock
     cell_regions: np.ndarray | None = None
+    #: the fracture of each local fracture face (an index into the values of
+    #: the fracture kernels' ``Regional`` coefficients); None: one fracture's values
+    fracture_regions: np.ndarray | None = None
 
     def regions(self) -> list[Region]:
         return sorted({t.region for t in self.residuals} | {t.region for t in self.jacobians})

@@ -179,7 +179,8 @@ class Problem:
         field's own value (the first component's)."""
         region = Region(self.disc.field(name).region, nodal=True)
         if region not in self._averaging:                 # no terms: not one of the residual's assemblers
-            model = Model(self.model.fields, cell_regions=self.model.cell_regions)
+            model = Model(self.model.fields, cell_regions=self.model.cell_regions,
+                          fracture_regions=self.model.fracture_regions)
             self._averaging[region] = Assembler(self.disc, model, self.scales, region=region)
         xl, _ = self.local_arrays(X or self.X, t)
         num, den = self._averaging[region].nodal_moments(xl, name, integrand, t, width)
@@ -387,7 +388,8 @@ class Problem:
         if not terms or self._jacobian_point is None:
             return None
         if key not in self._term_blocks:
-            model = Model(self.model.fields, [], terms, cell_regions=self.model.cell_regions)
+            model = Model(self.model.fields, [], terms, cell_regions=self.model.cell_regions,
+                          fracture_regions=self.model.fracture_regions)
             assemblers = [Assembler(self.disc, model, self.scales, region=r, inv_rscale=self.inv_rscale)
                           for r in sorted({j.region for j in terms})]
             mat = compat.coo_matrix(self.dm, *self._coo_pattern(assemblers), copy=False)

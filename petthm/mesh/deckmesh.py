@@ -17,7 +17,8 @@ FACE_NAMES_2D = {(0, 0): "west", (0, 1): "east", (1, 0): "bottom", (1, 1): "top"
 
 def layered_deck_box(path: str, lower: Sequence[float], upper: Sequence[float], size: float,
                      layers: Sequence[tuple[str, float]] = (), rotation: float = 0.0,
-                     wells: Sequence[tuple[str, Sequence]] = ()) -> str:
+                     wells: Sequence[tuple[str, Sequence]] = (),
+                     fractures: Sequence[tuple[str, Sequence]] = ()) -> str:
     """A box (2 or 3 corners' coordinates) of rock layers for a deck
     (../shared/docs/reservoir.md section 1): ``layers`` lists (name, top)
     from the bottom up, each layer a named region up to its top (the last
@@ -25,7 +26,9 @@ def layered_deck_box(path: str, lower: Sequence[float], upper: Sequence[float], 
     west/east (x), south/north (y, 3D), bottom/top (the vertical axis).
     ``wells`` lists (name, points): in 3D a polyline through the points,
     in 2D the points, embedded in the mesh as a named group of dimension 1
-    (0).  ``rotation`` (degrees) turns the whole mesh about the vertical
+    (0).  ``fractures`` lists (name, points): in 3D a plane polygon through
+    the points, in 2D a polyline, embedded as a named group of dimension 2
+    (1) (a deck names it in -thm_fractures).  ``rotation`` (degrees) turns the whole mesh about the vertical
     axis (3D) or the out-of-plane axis (2D) through the origin after meshing."""
     dim = len(lower)
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
@@ -39,13 +42,16 @@ def layered_deck_box(path: str, lower: Sequence[float], upper: Sequence[float], 
         lo, ext = lower.copy(), upper - lower
         lo[-1], ext[-1] = z0, z1 - z0
         cells.append(occ.addRectangle(*lo, 0, *ext) if dim == 2 else occ.addBox(*lo, *ext))
-    tools = [[(dim, c)] for c in cells[1:]] + [_well_entities(occ, dim, pts) for _, pts in wells]
+    tools = [[(dim, c)] for c in cells[1:]] + [_well_entities(occ, dim, pts) for _, pts in wells] + \
+        [_fracture_entities(occ, dim, pts) for _, pts in fractures]
     mapping = []
     if tools:
         _, mapping = occ.fragment([(dim, cells[0])], [e for t in tools for e in t])
     occ.synchronize()
     _name_deck_groups(gmsh, dim, lower, upper, layers)
-    _name_wells(gmsh, dim, wells, tools, mapping[1:])
+    first = len(cells) - 1
+    _name_pieces(gmsh, dim - 2, wells, tools, mapping[1:], first)
+    _name_pieces(gmsh, dim - 1, fractures, tools, mapping[1:], first + len(wells))
     gmsh.option.setNumber("Mesh.MeshSizeMin", size)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     return _write(gmsh, dim, path, place=None if not rotation else lambda g: _rotate_nodes(g, dim, rotation))
@@ -86,16 +92,29 @@ def _well_entities(occ, dim: int, points) -> list:
     return [(1, occ.addLine(a, b)) for a, b in zip(tags, tags[1:], strict=False)]
 
 
-def _name_wells(gmsh, dim: int, wells, tools, pieces) -> None:
-    """One physical group per well, of the pieces its entities were cut into."""
+def _fracture_entities(occ, dim: int, points) -> list:
+    """The lines of a polyline (2D) or the plane polygon (3D) of a fracture."""
+    tags = [occ.addPoint(*(list(map(float, x)) + [0.0] * (3 - len(x)))) for x in points]
+    if dim == 2:
+        if len(tags) < 2:
+            raise ValueError("a fracture in 2D is a polyline of two points or more")
+        return [(1, occ.addLine(a, b)) for a, b in zip(tags, tags[1:], strict=False)]
+    if len(tags) < 3:
+        raise ValueError("a fracture in 3D is a plane polygon of three points or more")
+    lines = [occ.addLine(a, b) for a, b in zip(tags, tags[1:] + tags[:1], strict=True)]
+    return [(2, occ.addPlaneSurface([occ.addCurveLoop(lines)]))]
+
+
+def _name_pieces(gmsh, edim: int, named, tools, pieces, first: int) -> None:
+    """One physical group per (name, points) of ``named`` (the tools from
+    index ``first`` on): the pieces of dimension ``edim`` its entities were cut into."""
     model = gmsh.model
     start = max([t for _, t in model.getPhysicalGroups()] or [0]) + 1
     owner = [k for k, t in enumerate(tools) for _ in t]         # the tool of each fragmented entity
-    for j, (name, _) in enumerate(wells):
-        k = len(tools) - len(wells) + j
-        ents = sorted({e[1] for i, piece in enumerate(pieces) if owner[i] == k for e in piece
-                       if e[0] == dim - 2})
-        model.addPhysicalGroup(dim - 2, ents, start + j, name=name)
+    for j, (name, _) in enumerate(named):
+        ents = sorted({e[1] for i, piece in enumerate(pieces) if owner[i] == first + j for e in piece
+                       if e[0] == edim})
+        model.addPhysicalGroup(edim, ents, start + j, name=name)
 
 
 def _rotate_nodes(gmsh, dim: int, degrees: float) -> None:

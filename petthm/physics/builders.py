@@ -53,7 +53,7 @@ from petthm.physics.kernels import flow as fk
 from petthm.physics.kernels import friction as fr
 from petthm.physics.kernels import heat as hk
 from petthm.physics.kernels import poroelastic as pe
-from petthm.physics.kernels.regional import per_region
+from petthm.physics.kernels.regional import Regional, per_region
 from petthm.physics.kernels.wallflux import WallConduction
 from petthm.physics.materials import NUSSELT
 from petthm.physics.monitors import contact_outputs
@@ -103,6 +103,13 @@ def heat_scheme(p, degree: int, supg: bool = True) -> str:
     if scheme == "auto":
         return "limited" if degree == 1 else "supg"
     return scheme
+
+
+def each_fracture(value, f: Callable):
+    """``f(value)``; for a ``Regional`` (one value per fracture), ``f`` of each (``per_region``)."""
+    if isinstance(value, Regional):
+        return per_region(f(v) for v in value.values)
+    return f(value)
 
 
 class ModelBuilder:
@@ -259,16 +266,21 @@ class ModelBuilder:
         return self.aperture
 
     # -- fracture flow and heat -------------------------------------------------------------
-    def fracture_flow(self, degree: int, *, reference_aperture: float, heat: bool = False,
-                      compressibility: float | None = None, source: Callable | None = None) -> fk.Flow:
+    def fracture_flow(self, degree: int, *, reference_aperture, heat: bool = False,
+                      compressibility: float | None = None, source: Callable | None = None,
+                      gravity: tuple = ()) -> fk.Flow:
         """pf: cubic-law flow on the fracture with storage a c_f (- a beta_f dTf/dt
-        with ``heat``), mu(Tf); per unit aperture on a deformable fracture."""
+        with ``heat``), mu(Tf); per unit aperture on a deformable fracture.
+        ``reference_aperture``: a number, or a ``Regional`` of one aperture
+        per fracture (the model's ``fracture_regions``); ``gravity``: the
+        vector rho_f g (N/m3), whose part along the fracture drives its flow."""
         p = self.p
         a = reference_aperture if self.aperture is None else 1.0
         cf = p.fluid_compressibility if compressibility is None else compressibility
-        beta = a * p.fluid_thermal_expansion if heat else 0.0
-        fl = fk.Flow(Domain.FRACTURE, "pf", "Tf" if heat else None, a * cf, a ** 3 / 12 * np.eye(self.dim),
-                     p.fluid_viscosity, beta, aperture=self.aperture, source=source,
+        beta = each_fracture(a, lambda a: a * p.fluid_thermal_expansion) if heat else 0.0
+        fl = fk.Flow(Domain.FRACTURE, "pf", "Tf" if heat else None, each_fracture(a, lambda a: a * cf),
+                     each_fracture(a, lambda a: a ** 3 / 12 * np.eye(self.dim)),
+                     p.fluid_viscosity, beta, aperture=self.aperture, source=source, gravity=tuple(gravity),
                      reference_pressure=getattr(p, "initial_pressure", 0.0),
                      reference_temperature=p.T0 if heat else 0.0)
         self.model.add_field(FieldSpec("pf", 1, degree, Domain.FRACTURE, unit="Pa"))
@@ -292,7 +304,8 @@ class ModelBuilder:
         p = self.p
         a = reference_aperture if self.aperture is None else 1.0
         ex = p.fracture_heat_exchange
-        hw = ex.coefficient(reference_aperture, p.fluid_conductivity)
+        hw = None if ex.mode == "equilibrium" else \
+            each_fracture(reference_aperture, lambda a: ex.coefficient(a, p.fluid_conductivity))
         if hw is not None and self.aperture is not None and ex.mode == "nusselt":
             hw = xk.ApertureExchange(NUSSELT * p.fluid_conductivity / 2, self.aperture)
         if hw is None:
@@ -302,7 +315,8 @@ class ModelBuilder:
                 raise InputError("option -thm_fracture_heat_exchange: only 'equilibrium' is implemented "
                                  "with a permeable matrix (the heat carried by leakoff needs the wall flux)")
             self.model.add(xk.exchange_terms("Tf", traces("Tm"), hw, lumped=lumped))
-        h = hk.Heat(Domain.FRACTURE, "Tf", a * p.fluid_rho_c, a * p.fluid_conductivity, p.fluid_rho_c,
+        h = hk.Heat(Domain.FRACTURE, "Tf", each_fracture(a, lambda a: a * p.fluid_rho_c),
+                    each_fracture(a, lambda a: a * p.fluid_conductivity), p.fluid_rho_c,
                     self.flows[Domain.FRACTURE], degree=degree, aperture=self.aperture,
                     source=source, **self._transport(degree, True, supg, False))
         self.model.add_field(FieldSpec("Tf", 1, degree, Domain.FRACTURE, **TEMPERATURE))

@@ -2,7 +2,7 @@
 
     python -m petthm.run.deckbox --lower 0,0,-3000 --upper 2000,2000,-1000 --size 200 \\
         --layers granite:-2000,sandstone:-1000 --well inj:1000,1000,-2800/1000,1000,-1200 \\
-        --out reservoir.msh
+        --fracture crack:600,600,-1500/1400,600,-1500/1400,1400,-1500/600,1400,-1500 --out reservoir.msh
 
 writes the mesh (``deckmesh.layered_deck_box``: named layers, faces west,
 east, south, north, bottom, top) and beside it a starter options file
@@ -37,16 +37,18 @@ def _layers(text: str) -> list[tuple[str, float]]:
     return out
 
 
-def _well(text: str) -> tuple[str, list]:
-    """NAME:x,y,z/x,y,z/... (3D: a polyline of two points or more; 2D: points)."""
+def _named_points(text: str, what: str, least: int) -> tuple[str, list]:
+    """NAME:x,y,z/x,y,z/... (a well: 3D a polyline, 2D points; a fracture:
+    3D a plane polygon, 2D a polyline), ``least`` points at least."""
     name, _, rest = text.partition(":")
-    points = [_numbers(p, f"--well {text}") for p in rest.split("/") if p]
-    if not name or not points:
-        raise InputError(f"--well = {text}: NAME:x,y,z/x,y,z/... (the well's name and its points)")
+    points = [_numbers(p, f"--{what} {text}") for p in rest.split("/") if p]
+    if not name or len(points) < least:
+        raise InputError(f"--{what} = {text}: NAME:x,y,z/x,y,z/... (the {what}'s name and its points, "
+                         f"{least} or more)")
     return name, points
 
 
-def starter_options(mesh: str, boundaries, regions, wells=()) -> str:
+def starter_options(mesh: str, boundaries, regions, wells=(), fractures=()) -> str:
     """An options file for a deck on ``mesh``: the mesh, gravity, the
     initial state, and every boundary's and region's options commented out."""
     import dataclasses
@@ -69,6 +71,10 @@ def starter_options(mesh: str, boundaries, regions, wells=()) -> str:
         lines.append(f"# -thm_wells {','.join(wells)}")
     for name in wells:
         lines.append(f"# -thm_well_{name}_rate Q   (or _pressure P; _times, _temperature, _radius)")
+    if fractures:
+        lines += ["# a deck's fractures are rigid: flow and heat, no u",
+                  f"-thm_fractures {','.join(fractures)}", "-thm_fields pm,pf,Tm,Tf"]
+    lines += [f"# -thm_fracture_{name}_aperture A" for name in fractures]
     return "\n".join(lines) + "\n"
 
 
@@ -81,6 +87,9 @@ def main(argv=None) -> int:
     ap.add_argument("--rotation", type=float, default=0.0, help="turn the mesh about the vertical (degrees)")
     ap.add_argument("--well", action="append", default=[],
                     help="NAME:x,y,z/x,y,z/... a well (3D: a polyline; 2D: points), repeated for more")
+    ap.add_argument("--fracture", action="append", default=[],
+                    help="NAME:x,y,z/x,y,z/... a fracture (3D: a plane polygon; 2D: a polyline), repeated "
+                    "for more")
     ap.add_argument("--out", required=True,
                     help="the mesh file to write (.msh); the options beside it (.opts)")
     args = ap.parse_args(argv)
@@ -92,17 +101,21 @@ def main(argv=None) -> int:
         layers = _layers(args.layers)
         if not args.out.endswith(".msh"):
             raise InputError(f"--out = {args.out}: a .msh file")
-        wells = [_well(w) for w in args.well]
-        if any(len(p) != len(lower) for _, pts in wells for p in pts):
-            raise InputError(f"--well: points of {len(lower)} coordinates, as --lower")
-        layered_deck_box(args.out, lower, upper, args.size, layers, rotation=args.rotation, wells=wells)
+        wells = [_named_points(w, "well", len(lower) - 1) for w in args.well]
+        fractures = [_named_points(f, "fracture", len(lower)) for f in args.fracture]
+        for what, named in (("well", wells), ("fracture", fractures)):
+            if any(len(p) != len(lower) for _, pts in named for p in pts):
+                raise InputError(f"--{what}: points of {len(lower)} coordinates, as --lower")
+        layered_deck_box(args.out, lower, upper, args.size, layers, rotation=args.rotation, wells=wells,
+                         fractures=fractures)
     except InputError as e:
         print(f"petthm: error: {e}", file=sys.stderr)
         return 2
     faces = (FACE_NAMES_3D if len(lower) == 3 else FACE_NAMES_2D).values()
     opts = os.path.splitext(args.out)[0] + ".opts"
     with open(opts, "w") as f:
-        f.write(starter_options(args.out, faces, [n for n, _ in layers] or ["rock"], [n for n, _ in wells]))
+        f.write(starter_options(args.out, faces, [n for n, _ in layers] or ["rock"], [n for n, _ in wells],
+                                [n for n, _ in fractures]))
     print(f"wrote {args.out} and {opts}")
     return 0
 

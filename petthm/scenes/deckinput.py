@@ -18,10 +18,8 @@ from petthm.mesh import groups as mg
 from petthm.params import DISCRETISATION, PHYSICS, did_you_mean, param
 from petthm.physics import materials as mt
 
-#: the fields a deck may have (rock only)
-DECK_FIELDS = ("u", "pm", "Tm")
-#: what a deck cannot hold yet: the option prefixes and what they would set
-NOT_YET = {"thm_fracture_": "fractures", "thm_fractures": "fractures"}
+#: the fields a deck may have
+DECK_FIELDS = ("u", "pm", "pf", "Tm", "Tf")
 #: the rock properties a region may give (-thm_region_NAME_rock_*, ../shared/docs/reservoir.md section 2)
 REGION_FIELDS = mt.ELASTIC + ("rock_biot_coefficient", "rock_density", "rock_heat_capacity",
                               "rock_conductivity", "rock_thermal_expansion", "rock_porosity",
@@ -31,11 +29,15 @@ REGION_FIELDS = mt.ELASTIC + ("rock_biot_coefficient", "rock_density", "rock_hea
 @dataclass(frozen=True)
 class DeckParams:
     """Deck (reservoir)"""
-    fields: str = param("", "-", "the fields to solve for, a comma list of u, pm, Tm (default: every field "
-                        "the deck has: u, Tm, and pm where the permeability is not zero)",
+    fields: str = param("", "-", "the fields to solve for, a comma list of u, pm, pf, Tm, Tf (default: every "
+                        "field the deck has: u, Tm, pm where the permeability is not zero, pf and Tf with "
+                        "fractures)",
                         kind=DISCRETISATION)
     fe_degree_flow: int = param(0, "-", "degree of pm and Tm (0: P1 with P2 u, else -thm_fe_degree)",
                                 choices=(0, 1, 2), kind=DISCRETISATION)
+    fractures: str = param("", "-", "the fractures, a comma list of the names of the mesh's groups of "
+                           "dimension 2 (3D) or 1 (2D): -thm_fracture_NAME_* (manual: decks, fractures)",
+                           kind=PHYSICS)
     wells: str = param("", "-", "the wells, a comma list of the names of the mesh's groups of dimension 1 "
                        "(3D) or 0 (2D): -thm_well_NAME_* (manual: decks, wells)", kind=PHYSICS)
     power_reference_temperature: str = param("", "degC", "T_ref of a producer's thermal power rho_f C_f Q "
@@ -128,19 +130,6 @@ def classify(groups, path: str) -> DeckGroups:
     return DeckGroups(dim, regions, boundaries, points)
 
 
-def check_not_yet(options=None) -> None:
-    """An input error for the options of what a deck cannot hold yet (``NOT_YET``)."""
-    from petsc4py import PETSc
-    opts = options or PETSc.Options()
-    for key in sorted(opts.getAll()):
-        low = key.lower()
-        for prefix, what in NOT_YET.items():
-            if low.startswith(prefix):
-                raise InputError(f"option -{key}: {what} are not part of a reservoir deck yet (fractured "
-                                 "rock: the paper's scenes rigid_fracture, penny_impermeable, "
-                                 "inclined_penny)")
-
-
 def unknown_named_options(groups: DeckGroups, known=(), options=None) -> None:
     """An input error for a -thm_bc_NAME_* (-thm_region_NAME_*,
     -thm_well_NAME_*) option whose NAME is not a boundary (region, well
@@ -169,7 +158,12 @@ def _check_named_option(key, rest, what, plural, names, suffixes) -> None:
     if name not in {n.lower() for n in names}:
         raise InputError(f"option -{key}: the mesh has no {what} '{name}'{did_you_mean(name, names)}; "
                          f"its {plural}: {', '.join(names) or 'none'}")
-    suffix = rest[len(name) + 1:]
+    check_suffix(key, rest[len(name) + 1:], what, suffixes)
+
+
+def check_suffix(key: str, suffix: str, what: str, suffixes) -> None:
+    """An input error for option ``key`` of a named group whose ``suffix`` is
+    none that a ``what`` (boundary, region, well, fracture) takes."""
     if suffix not in suffixes:
         raise InputError(f"option -{key}: a {what} takes {', '.join(suffixes)}"
                          f"{did_you_mean(suffix, suffixes)}")

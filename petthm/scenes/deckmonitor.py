@@ -14,23 +14,25 @@ from petthm.scenes.base import Monitor
 
 class DeckMonitor(Monitor):
     """How far the deck has moved from its initial state: the largest
-    displacement (m) and the largest change of pm (Pa) and Tm (K) over the
+    displacement (m) and the largest change of pm, pf (Pa) and Tm, Tf (K) over the
     nodes, per step (beside the field ranges of ``run.ranges``); and each
     well's rate, pressure, temperature and power (``deckwells.well_columns``)."""
 
-    def __init__(self, fields, initial, wells=(), power_reference: float = 0.0):
+    def __init__(self, fields, initial, wells=(), power_reference: float = 0.0, fixed=None):
         self.fields, self.initial = fields, initial
+        #: columns whose values do not change (a rigid fracture's aperture)
+        self.fixed = dict(fixed or {})
         self.wells, self.power_reference = list(wells), power_reference
         self.warned: set[str] = set()
         self.last = {}
 
     def __call__(self, problem, t, X=None):
-        out = {}
+        out = dict(self.fixed)
         if "u" in self.fields:
             v = problem.field_values("u", X, t)
             size = np.linalg.norm(v, axis=1) if len(v) else v[:, 0]
             out["u_max"] = probes.global_max(problem.dm.comm, size, empty=0.0)
-        for name in ("pm", "Tm"):
+        for name in ("pm", "pf", "Tm", "Tf"):
             if name in self.fields:
                 out[f"{name}_change_max"] = probes.max_nodal_error(problem, name, self.initial[name], X, t)
         for w in self.wells:

@@ -113,6 +113,7 @@ def line_wells(scene, mesh, fields) -> list[lw.LineWell]:
                          f"{', '.join(fields)})")
     wanted = [g for g in groups.points if g.name in scene.wells]
     paths = read_well_paths(scene.run.mesh_file, mesh.dim, wanted, groups.regions, mesh.dm.comm.tompi4py())
+    check_off_fractures(mesh, paths)
     K = [scene.permeability(name, mesh.dim) for name in scene.rocks]
     heat = "Tm" in fields
     out = []
@@ -123,6 +124,28 @@ def line_wells(scene, mesh, fields) -> list[lw.LineWell]:
                              f"-thm_well_{path.name}_temperature")
         out.append(_line_well(scene, path, c, K, heat))
     return out
+
+
+def check_off_fractures(mesh, paths) -> None:
+    """A well with a node on a fracture is refused: wells on or crossing
+    fractures are not part of a deck yet (collective)."""
+    if mesh.fracture is None:
+        return
+    from scipy.spatial import cKDTree
+    x = mesh.vertex_coords[np.unique(mesh.fracture.cell_vertices)]
+    tree = cKDTree(x) if len(x) else None
+    tolerance = 1e-9 * float(np.max(mesh.vertex_coords.max(axis=0) - mesh.vertex_coords.min(axis=0)))
+    found = None
+    for path in paths:
+        if tree is not None and found is None:
+            d, _ = tree.query(path.points)
+            if np.any(d <= tolerance):
+                k = int(np.argmin(d))
+                found = (path.name, ", ".join(f"{c:.6g}" for c in path.points[k]))
+    found = next((f for f in mesh.dm.comm.tompi4py().allgather(found) if f), None)
+    if found:
+        raise InputError(f"well {found[0]} meets a fracture at ({found[1]}): wells on or crossing fractures "
+                         "are not part of a deck yet")
 
 
 def _line_well(scene, path, c: Control, K, heat: bool) -> lw.LineWell:

@@ -31,8 +31,13 @@ What a deck holds here:
   pressure, at a rate or a pressure by a piecewise-constant schedule
   (physics/linewells.py; ``deckwells.py`` makes them from the options).
 
-Fractures are not part of a deck yet: their options are refused with an
-error that says so.
+* fractures (``-thm_fractures``, ``-thm_fracture_NAME_aperture``):
+  named groups of dimension d - 1 split into cohesive cells, with
+  fracture flow pf and heat Tf at a fixed aperture each, leakoff (pm = pf
+  on the walls) and the walls' heat exchange (``deckfractures.py``); a
+  held pressure or temperature holds pf or Tf where a fracture reaches the
+  boundary (``deckbc.py``).  A fractured deck's rock mechanics is refused
+  with an error that says so.
 """
 from __future__ import annotations
 
@@ -43,8 +48,7 @@ import numpy as np
 from petthm import params as P
 from petthm.discretisation import probes
 from petthm.discretisation.assembly import FieldScale
-from petthm.discretisation.constraints import Dirichlet
-from petthm.discretisation.model import FacetTerm, Range
+from petthm.discretisation.model import Range
 from petthm.errors import InputError
 from petthm.expressions import Expression, values_at
 from petthm.mesh import groups as mg
@@ -52,12 +56,13 @@ from petthm.mesh.groups import CELL_SETS
 from petthm.params import CELSIUS
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
-from petthm.physics.kernels.regional import per_region
+from petthm.physics.kernels.regional import Regional, per_region
 from petthm.physics.linewells import well_term
+from petthm.scenes import deckfractures as df
 from petthm.scenes import deckwells as dw
 from petthm.scenes.base import Scene, Setup, TimeDefaults
+from petthm.scenes.deckbc import DeckBoundaries
 from petthm.scenes.deckinput import (
-    BC_FIELD,
     BC_SUFFIXES,
     DECK_FIELDS,
     REGION_FIELDS,
@@ -66,9 +71,7 @@ from petthm.scenes.deckinput import (
     DeckParams,
     WellValues,
     bulk_density,
-    check_not_yet,
     classify,
-    corners,
     deck_groups,
     domain_extent,
     first_not_liquid,
@@ -76,13 +79,12 @@ from petthm.scenes.deckinput import (
     named_field,
     rock_values,
     unknown_named_options,
-    vector_expressions,
 )
 from petthm.scenes.deckmonitor import DeckMonitor
 from petthm.solvers.options import direct_solver_defaults
 
 
-class Reservoir(Scene):
+class Reservoir(DeckBoundaries, Scene):
     """A deck: the module docstring."""
     name = "reservoir"
     description = "your own reservoir: a gmsh mesh with named groups and an options file (manual: decks)"
@@ -94,24 +96,31 @@ class Reservoir(Scene):
         mt.group("Initial state", ("initial_temperature", "initial_pressure", "insitu_stress"),
                  insitu_stress="0"),
         mt.group("Gravity", ("gravity",), gravity=0.0),
+        mt.group("Fracture", ("fracture_aperture", "fracture_heat_exchange",      # parameters[4]: named_help
+                              "fracture_supg_wall_conduction")),
         mt.group("Wells", ("well_radius",)),
         mt.group("Coupling", ("thermomechanical_heating",)),
         mt.group("Heat transport", mt.HEAT_DISCRETISATION),
         DeckParams)
     time = TimeDefaults(final_time=3.15576e7, dt_initial=8.64e4, dt_growth=1.2, dt_max=3.15576e7 / 12)
-    history_columns = ("u_max", "pm_change_max", "Tm_change_max")
+    history_columns = ("u_max", "pm_change_max", "pf_change_max", "Tm_change_max", "Tf_change_max")
 
     def __init__(self, run, p):
         super().__init__(run, p)
         from petsc4py import PETSc
         self.groups = deck_groups(run.mesh_file, PETSc.COMM_WORLD.tompi4py())
+        #: the fractures' groups (-thm_fractures) and each one's parameters (-thm_fracture_NAME_*)
+        self.fracture_groups = df.fracture_groups(p.fractures, self.groups)
+        self.fractures = df.fracture_values(p, self.fracture_groups)
         self.bc = {g.name: P.read_named(BoundaryValues(), BC_SUFFIXES, "bc", g.name)
-                   for g in self.groups.boundaries}
+                   for g in self.groups.boundaries if g not in self.fracture_groups}
+        self.check_no_fracture_conditions()
         #: the parameters of each region, in the order of the mesh's regions (-thm_region_NAME_rock_*)
         self.rocks = {g.name: P.read_named(p, REGION_FIELDS, "region", g.name) for g in self.groups.regions}
         #: the wells' controls (-thm_wells, -thm_well_NAME_*)
         self.wells = dw.well_controls(p, self.groups)
-        self.history_columns = type(self).history_columns + dw.history_columns(self.wells)
+        self.history_columns = type(self).history_columns + dw.history_columns(self.wells) + \
+            df.history_columns(self.fractures)
 
     def parameter_sets(self):
         """The run's and the deck's parameters, the boundaries' values
@@ -124,15 +133,21 @@ class Reservoir(Scene):
                    for name, rock in self.rocks.items() for f in REGION_FIELDS]
         fields += [named_field("well", name, f, getattr(values, f.name))
                    for name, values in self.wells.items() for f in dataclasses.fields(WellValues)]
+        fields += [named_field("fracture", name, by_name[f], getattr(q, f))
+                   for name, q in self.fractures.items() for f in df.FRACTURE_FIELDS]
         return (self.run, self.p, dataclasses.make_dataclass("Named", fields, frozen=True)())
 
     @classmethod
     def named_options(cls, run):
         from petsc4py import PETSc
-        check_not_yet()
         groups = deck_groups(run.mesh_file, PETSc.COMM_WORLD.tompi4py())
-        unknown_named_options(groups, known=P.known_options(cls.parameters))
+        known = P.known_options(cls.parameters)
+        unknown_named_options(groups, known=known)
+        text = PETSc.Options().getString("thm_fractures", "")
+        fractures = df.fracture_groups(text, groups)
+        df.check_fracture_options(text, groups, fractures, known)
         return (P.named_options(BoundaryValues, BC_SUFFIXES, "bc", [g.name for g in groups.boundaries]) |
+                df.named_fracture_options(fractures) |
                 {P.named_option("region", g.name, f) for f in REGION_FIELDS for g in groups.regions} |
                 P.named_options(WellValues, WELL_SUFFIXES, "well", [g.name for g in groups.points]))
 
@@ -145,13 +160,17 @@ class Reservoir(Scene):
         well = P.help_text((WellValues,)).split("\n")[1:]
         rock = [line for line in P.help_text((cls.parameters[0],)).split("\n")[1:]
                 if line.split()[0][len("-thm_"):] in REGION_FIELDS]
+        fracture = ["  Fractures (named in -thm_fractures; default: the global value)"] + \
+            [line.replace("-thm_fracture_", "-thm_fracture_<NAME>_", 1)
+             for line in P.help_text((cls.parameters[4],)).split("\n")[1:]
+             if line.split()[0][len("-thm_"):] in df.FRACTURE_FIELDS]
         if not mesh_file:
             return "\n".join(["  Boundaries (give -thm_mesh_file F.msh to list them for its boundaries)"] +
                              [line.replace("-thm_", "-thm_bc_<NAME>_", 1) for line in bc] +
                              ["  Regions (default: the global value)"] +
                              [line.replace("-thm_", "-thm_region_<NAME>_", 1) for line in rock] +
                              ["  Wells (named in -thm_wells)"] +
-                             [line.replace("-thm_", "-thm_well_<NAME>_", 1) for line in well])
+                             [line.replace("-thm_", "-thm_well_<NAME>_", 1) for line in well] + fracture)
         groups = classify(mg.read_physical_names(mesh_file), mesh_file)
         lines = []
         for kind, what, named, options in (("bc", "Boundary", groups.boundaries, bc),
@@ -160,7 +179,7 @@ class Reservoir(Scene):
             for g in named:
                 lines.append(f"  {what} {g.name} of {mesh_file}")
                 lines += [line.replace("-thm_", f"-thm_{kind}_{g.name.lower()}_", 1) for line in options]
-        return "\n".join(lines)
+        return "\n".join(lines + fracture)
 
     # a sparse direct solve; the size rule puts the block preconditioner in its place on large decks
     solver_defaults = staticmethod(direct_solver_defaults)
@@ -169,10 +188,20 @@ class Reservoir(Scene):
         return self.groups.dim, ""
 
     def fracture_tags(self) -> tuple[int, ...]:
-        """None of the mesh's groups is split: a deck's boundaries and
-        regions keep their faces whatever their tags (fractures are not
-        part of a deck yet)."""
-        return ()
+        """The tags of the groups of -thm_fractures, in its order: only they
+        are split (a deck's boundaries and regions keep their faces whatever
+        their tags)."""
+        return tuple(g.tag for g in self.fracture_groups)
+
+    def check_no_fracture_conditions(self) -> None:
+        """A fracture is no boundary: -thm_bc_NAME_* of a fracture is an error."""
+        from petsc4py import PETSc
+        for key in PETSc.Options().getAll():
+            for g in self.fracture_groups:
+                if key.lower().startswith(f"thm_bc_{g.name.lower()}_"):
+                    raise InputError(f"option -{key}: {g.name} is a fracture (-thm_fractures), not a "
+                                     "boundary; a pressure or temperature held on a boundary holds a "
+                                     "fracture that reaches it")
 
     def water_temperatures(self):
         """None before the mesh: a deck's temperatures are checked at the nodes (``check_water``)."""
@@ -198,23 +227,51 @@ class Reservoir(Scene):
 
     # -- the fields ------------------------------------------------------------------------------
     def fields(self, dim: int) -> tuple[str, ...]:
-        """The deck's fields in canonical order: -thm_fields, else every field it has."""
+        """The deck's fields in canonical order: -thm_fields, else every field
+        it has (u, Tm; pm where a permeability is not zero; pf and Tf with
+        fractures), checked (``check_fields``)."""
         p = self.p
         has = ["u", "Tm"]
         permeabilities = [self.permeability(name, dim) for name in self.rocks]     # each checked
         if any(np.any(k != 0) for k in permeabilities):
             has.append("pm")
-        if not p.fields:
-            return tuple(f for f in DECK_FIELDS if f in has)
-        wanted = [s.strip() for s in p.fields.split(",") if s.strip()]
+        if self.fractures:
+            has += ["pf", "Tf"]
+        wanted = [s.strip() for s in p.fields.split(",") if s.strip()] or has
         for f in wanted:
             if f not in DECK_FIELDS:
-                raise InputError(f"option -thm_fields = {p.fields}: '{f}' is not a field of a deck (rock "
-                                 f"only: {', '.join(DECK_FIELDS)}){P.did_you_mean(f, DECK_FIELDS)}")
+                raise InputError(f"option -thm_fields = {p.fields}: '{f}' is not a field of a deck "
+                                 f"({', '.join(DECK_FIELDS)}){P.did_you_mean(f, DECK_FIELDS)}")
             if f not in has:
-                raise InputError(f"option -thm_fields = {p.fields}: pm needs a permeability that is not zero "
-                                 "(-thm_rock_permeability or a region's -thm_region_NAME_rock_permeability)")
-        return tuple(f for f in DECK_FIELDS if f in wanted)
+                raise InputError(f"option -thm_fields = {p.fields}: {f} needs "
+                                 + ("fractures (-thm_fractures)" if f in ("pf", "Tf") else
+                                    "a permeability that is not zero (-thm_rock_permeability or a region's "
+                                    "-thm_region_NAME_rock_permeability)"))
+        fields = tuple(f for f in DECK_FIELDS if f in wanted)
+        self.check_fields(fields)
+        return fields
+
+    def check_fields(self, fields) -> None:
+        """The fields of a fractured deck go together: its rock's pm and Tm
+        meet the fractures' pf and Tf on the walls, Tf needs pf; a
+        fractured deck's mechanics is not part of a deck yet."""
+        if not self.fractures:
+            return
+        option = f"option -thm_fields = {self.p.fields}" if self.p.fields else "the deck's fields"
+        if "pf" not in fields:
+            raise InputError(f"{option}: a fractured deck (-thm_fractures = {self.p.fractures}) needs pf, "
+                             "the fractures' water")
+        rules = (("u", None, "the rock mechanics of a fractured deck (contact on its fractures) is not part "
+                             "of a deck yet: leave u out (-thm_fields pm,pf,Tm,Tf)"),
+                 ("pm", "pf", "pm needs pf in a fractured deck (the walls' pressure is the fracture's)"),
+                 ("Tm", "Tf", "Tm needs Tf where the fractures carry water (pf): the walls' temperature "
+                              "is the fracture's water's"),
+                 ("Tf", "pf", "Tf needs pf (the fracture's water)"),
+                 ("Tf", "Tm", "Tf needs Tm (the rock the fracture's water exchanges heat with)"))
+        for have, needs, why in rules:
+            if have in fields and (needs is None or needs not in fields) and \
+                    not (have == "Tm" and "pf" not in fields):
+                raise InputError(f"{option}: {why}")
 
     def check_flow_regions(self, dim: int) -> None:
         """pm needs, in every region, a permeability or a storage that is
@@ -256,10 +313,18 @@ class Reservoir(Scene):
                           heat="Tm" in fields,
                           gravity=tuple(p.fluid_density * g), reference_pressure=0.0,
                           reference_temperature=CELSIUS)
+        if "pf" in fields:
+            a = df.apertures(self.fractures)
+            b.fracture_flow(fd, reference_aperture=a, heat="Tf" in fields, gravity=tuple(p.fluid_density * g))
+            if "pm" in fields:
+                b.leakoff()
         temperatures = self.temperature_range(mesh)
         if "Tm" in fields:
             b.matrix_heat(fd)
             b.model.ranges["Tm"] = temperatures
+        if "Tf" in fields:
+            b.fracture_heat(fd, reference_aperture=a)
+            b.model.ranges["Tf"] = temperatures
         b.model.facets.extend(facets)
         if self.wells:
             self.line_wells = dw.line_wells(self, mesh, fields)
@@ -267,9 +332,12 @@ class Reservoir(Scene):
         model = b.build()
         if len(set(map(rock_values, self.rocks.values()))) > 1:
             model.cell_regions = self.cell_regions(mesh)
-        init = {"u": lambda x: np.zeros((len(x), dim)), "pm": p0, "Tm": T0}
+        if "pf" in fields and isinstance(a, Regional):
+            model.fracture_regions = df.fracture_regions(mesh, len(self.fractures))
+        init = {"u": lambda x: np.zeros((len(x), dim)), "pm": p0, "pf": p0, "Tm": T0, "Tf": T0}
         return Setup(model, bcs, self.scales(mesh, fields, temperatures), {f: init[f] for f in fields},
-                     DeckMonitor(fields, init, getattr(self, "line_wells", []), self.power_reference()))
+                     DeckMonitor(fields, init, getattr(self, "line_wells", []), self.power_reference(),
+                                 df.aperture_columns(self.fractures)))
 
     def hit_times(self) -> list[float]:
         """The times of the wells' schedules: the steps land on them."""
@@ -313,76 +381,6 @@ class Reservoir(Scene):
         """p0(x) in Pa (gauge) at points (n, d)."""
         value = self.p.initial_pressure
         return lambda x: values_at(value, x)
-
-    # -- boundary conditions ------------------------------------------------------------------
-    def boundary_conditions(self, mesh, fields) -> tuple[list, list]:
-        """The Dirichlet conditions and the facet terms of the -thm_bc_NAME_* options."""
-        bcs, facets = [], []
-        for name, values in self.bc.items():
-            for suffix in BC_SUFFIXES:
-                text = getattr(values, suffix)
-                if not text:
-                    continue
-                option = f"-{P.named_option('bc', name, suffix)}"
-                field = BC_FIELD[suffix]
-                if field not in fields:
-                    raise InputError(f"option {option}: a condition on {field}, which this deck does not "
-                                     f"have (its fields: {', '.join(fields)})")
-                made = self.condition(mesh, name, suffix, text, option)
-                (bcs if isinstance(made, Dirichlet) else facets).append(made)
-        return bcs, facets
-
-    def condition(self, mesh, name, suffix, text, option):
-        """One boundary value: a Dirichlet condition or a facet term on boundary ``name``."""
-        dim, label = mesh.dim, name
-        if suffix == "displacement":
-            parts = vector_expressions(text, option, dim)
-            return Dirichlet("u", label, lambda x, t: np.stack([e(x) for e in parts], axis=1))
-        if suffix == "traction" or suffix == "normal_stress":
-            return self.load(label, suffix, text, option, dim)
-        e = Expression(text, option, dim)
-        if suffix == "pressure":
-            return Dirichlet("pm", label, lambda x, t: e(x))
-        if suffix == "temperature":
-            return Dirichlet("Tm", label, lambda x, t: e(x) + CELSIUS)
-        if suffix == "normal_displacement":
-            axis, sign = self.face_axis(mesh, label, name, option)
-            return Dirichlet("u", label, lambda x, t: sign * e(x), components=(axis,))
-        kind = "pm" if suffix == "flux" else "Tm"
-        return FacetTerm(kind, label, lambda ctx: _at_facets(e, ctx)[..., None])
-
-    def load(self, label, suffix, text, option, dim):
-        """A total traction (or normal stress) on a boundary: the load on u,
-        the part beyond the in-situ traction -S n that the boundary already carries."""
-        S = insitu_tensor(self.p, dim)
-        if suffix == "traction":
-            parts = vector_expressions(text, option, dim)
-        else:
-            sigma_n = Expression(text, option, dim)
-
-        def f0(ctx):
-            x = ctx.x.reshape(-1, dim)
-            n = np.broadcast_to(ctx.n, ctx.x.shape).reshape(-1, dim)
-            if suffix == "traction":
-                total = np.stack([e(x) for e in parts], axis=1)
-            else:
-                total = -sigma_n(x)[:, None] * n
-            load = total + np.einsum("nij,nj->ni", S(x), n)
-            return -load.reshape(ctx.x.shape)
-        return FacetTerm("u", label, f0)
-
-    def face_axis(self, mesh, label, name, option) -> tuple[int, float]:
-        """(axis, sign of the outward normal) of a plane boundary normal to an
-        axis; an input error for any other (collective)."""
-        cells, local, _ = mesh.boundary_facets(label)
-        n = mesh.outward_normals(cells, local) if len(cells) else np.zeros((0, mesh.dim))
-        lo, hi = corners(mesh.dm.comm, n, mesh.dim)
-        for axis in range(mesh.dim):
-            for sign in (1.0, -1.0):
-                if sign * lo[axis] > 1 - 1e-9 and sign * hi[axis] > 1 - 1e-9:
-                    return axis, sign
-        raise InputError(f"option {option}: boundary '{name}' is not a plane normal to the x, y or z axis; "
-                         f"give its displacement instead (-thm_bc_{name}_displacement)")
 
     # -- checks of the deck -------------------------------------------------------------------
     def check_held(self, bcs, dim) -> None:
@@ -481,14 +479,9 @@ class Reservoir(Scene):
         plo, phi = probes.global_min(comm, p0), probes.global_max(comm, p0)
         dp = max(phi - plo, p.fluid_density * p.gravity * extent, 1e5)
         out = {"Tm": FieldScale(dT, 0.5 * (Tr.upper + Tr.lower)), "pm": FieldScale(dp, 0.5 * (plo + phi))}
+        out["Tf"], out["pf"] = out["Tm"], out["pm"]
         strains = [max(q.rock_thermal_expansion * dT / 3, q.rock_biot_coefficient * dp / q.bulk_modulus)
                    for q in self.rocks.values()]
         strain = max(strains + [1e-6])
         out["u"] = FieldScale(strain * extent)
         return {f: out[f] for f in fields}
-
-
-def _at_facets(e: Expression, ctx) -> np.ndarray:
-    x = ctx.x
-    return e(x.reshape(-1, x.shape[-1])).reshape(x.shape[:-1])
-

@@ -49,7 +49,15 @@ def _error(tmp_path, *options):
     (("-thm_bc_top_pressure", "(-z)*rho"), ("-thm_bc_top_pressure", "the name 'rho'", "accepted")),
     (("-thm_initial_temperature", "20+__import__(1)"), ("-thm_initial_temperature", "__import__",
                                                         "not accepted")),
-    (("-thm_fields", "u,pf"), ("-thm_fields", "'pf' is not a field of a deck")),
+    (("-thm_fields", "u,pf"), ("-thm_fields = u,pf", "pf needs fractures (-thm_fractures)")),
+    (("-thm_fields", "u,pff"), ("-thm_fields", "'pff' is not a field of a deck", "did you mean pf?")),
+    (("-thm_bc_top_pressure", 0, *HOLD), ("-thm_bc_top_pressure", "carries its heat",
+                                          "-thm_bc_top_temperature")),
+    (("-thm_fractures", "tpo"), ("-thm_fractures = tpo", "no group 'tpo'", "did you mean top?",
+                                 "a fracture is a group of dimension 2")),
+    (("-thm_fractures", "granite"), ("-thm_fractures = granite", "'granite' is a group of dimension 3")),
+    (("-thm_fracture_top_aperture", 1e-3), ("-thm_fracture_top_aperture", "'top' is not a fracture",
+                                            "give -thm_fractures top")),
     (("-thm_fields", "Tm", "-thm_bc_top_pressure", 0), ("-thm_bc_top_pressure", "a condition on pm",
                                                          "its fields: Tm")),
     (("-thm_fields", "u,Tm"), ("nothing holds u_x,y,z", "rigid body")),
@@ -159,3 +167,61 @@ def test_the_geometry_tool_writes_a_mesh_and_a_starter_deck(tmp_path):
     assert s["status"] == "stopped" and s["change"]["Tm_change_max"] > 0
     bad = tool("--lower", "0,0", "--upper", "1,1,1", "--size", "1", "--out", str(tmp_path / "x.msh"))
     assert bad.returncode == 2 and bad.stderr.startswith("petthm: error: --lower and --upper")
+
+
+@pytest.fixture(scope="module")
+def fracbox(tmp_path_factory):
+    """A box with a square fracture 'crack' at 150 m depth and a well 'w' through it."""
+    return layered_deck_box(str(tmp_path_factory.mktemp("deckfrac") / "fb.msh"), [0, 0, -300], [300, 300, 0],
+                            150, wells=[("w", [(150, 150, -250), (150, 150, -50)])],
+                            fractures=[("crack", [(75, 75, -150), (225, 75, -150), (225, 225, -150),
+                                                  (75, 225, -150)])])
+
+
+FLOW_HEAT = ("-thm_fields", "pm,pf,Tm,Tf")
+
+
+@pytest.mark.parametrize("options,words", [
+    (("-thm_fractures", "crack"), ("rock mechanics of a fractured deck", "leave u out")),
+    (("-thm_fractures", "crack", "-thm_fields", "pm,Tm"), ("-thm_fields = pm,Tm", "needs pf")),
+    (("-thm_fractures", "crack", "-thm_fields", "pm,pf,Tm"), ("Tm needs Tf",)),
+    (("-thm_fractures", "crack", "-thm_fields", "pf,Tf"), ("Tf needs Tm",)),
+    (("-thm_fractures", "crack,crack", *FLOW_HEAT), ("'crack' is listed twice",)),
+    (("-thm_fractures", "crack", "-thm_fracture_crack_friction", 0.6, *FLOW_HEAT),
+     ("-thm_fracture_crack_friction", "deformable fractures", "not part of a deck yet")),
+    (("-thm_fractures", "crack", "-thm_fracture_crack_aperature", 1e-3, *FLOW_HEAT),
+     ("-thm_fracture_crack_aperature", "a fracture takes aperture", "did you mean aperture?")),
+    (("-thm_fractures", "crack", "-thm_fracture_crack_aperture", -1, *FLOW_HEAT),
+     ("-thm_fracture_crack_aperture = -1",)),
+    (("-thm_fractures", "crack", "-thm_bc_crack_pressure", 0, *FLOW_HEAT),
+     ("-thm_bc_crack_pressure", "crack is a fracture", "not a boundary")),
+    (("-thm_fractures", "crack", "-thm_wells", "w", "-thm_well_w_pressure", 1e6, *FLOW_HEAT),
+     ("well w meets a fracture at (150, 150, -150)", "not part of a deck yet")),
+])
+def test_a_bad_fracture_is_one_line_naming_what_is_wrong(tmp_path, fracbox, options, words):
+    msg = _error(tmp_path, "-thm_mesh_file", fracbox, *options)
+    assert all(w in msg for w in words), msg
+
+
+def test_the_geometry_tool_writes_a_fractured_deck_that_runs(tmp_path):
+    """--fracture embeds a named fracture; the starter deck names it, and with
+    the boundaries' values filled in it runs."""
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+    out = tmp_path / "frac.msh"
+    tool = [sys.executable, "-m", "petthm.run.deckbox", "--lower", "0,-100", "--upper", "200,0",
+            "--size", "25", "--fracture", "crack:0,-50/200,-50", "--out", str(out)]
+    proc = subprocess.run(tool, cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    opts = (tmp_path / "frac.opts").read_text()
+    assert "-thm_fractures crack\n" in opts and "# -thm_fracture_crack_aperture A" in opts
+    help_command = [sys.executable, "-m", "petthm", "reservoir", "-thm_mesh_file", str(out), "-help"]
+    listed = subprocess.run(help_command, cwd=ROOT, capture_output=True, text=True).stdout
+    assert "-thm_fractures " in listed and "-thm_fracture_<NAME>_aperture" in listed
+    _, s = run_petthm("reservoir", tmp_path / "run", "-options_file", tmp_path / "frac.opts",
+                      "-thm_gravity", 0, "-thm_bc_west_pressure", 1e6, "-thm_bc_west_temperature", 20,
+                      "-thm_bc_east_pressure", 0, "-thm_bc_east_temperature", 80,
+                      "-thm_initial_temperature", 80, "-ts_max_steps", 2, check=False)
+    assert s["status"] == "stopped" and s["change"]["Tf_change_max"] > 0

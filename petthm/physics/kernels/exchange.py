@@ -12,6 +12,7 @@ import numpy as np
 
 from petthm.discretisation.model import CellJacobian, CellResidual, Domain, Region
 from petthm.physics.kernels.flow import g0_block
+from petthm.physics.kernels.regional import at
 
 
 @dataclass(frozen=True)
@@ -30,7 +31,9 @@ class ApertureExchange:
 
 
 def _hw(hw, ctx):
-    """A wall coefficient: a number, or per point (``ApertureExchange``)."""
+    """A wall coefficient: a number (one per fracture: a ``Regional``), or
+    per point (``ApertureExchange``)."""
+    hw = at(hw, ctx)
     return hw.value(ctx) if isinstance(hw, ApertureExchange) else hw
 
 

@@ -78,11 +78,16 @@ def mobility(fl: Flow, ctx):
 
 
 def unit_darcy(fl: Flow, ctx):
-    """K (grad p - rho_f g) (nc, nq, d), K without a deformable fracture's a^3."""
+    """K (grad p - rho_f g) (nc, nq, d), K without a deformable fracture's a^3;
+    on a fracture, the part of rho_f g along it (grad p is tangential there)."""
     fl = at(fl, ctx)
     drive = ctx.grad(fl.p)[:, :, 0, :]
     if fl.gravity:
-        drive = drive - np.asarray(fl.gravity, dtype=float)
+        g = np.asarray(fl.gravity, dtype=float)
+        if fl.region is Domain.FRACTURE:
+            n = ctx.normals
+            g = g - (n @ g)[..., None] * n
+        drive = drive - g
     return drive @ np.swapaxes(fl.permeability, -1, -2)
 
 

@@ -469,6 +469,23 @@ def outflow_term(h: Heat, boundary: str) -> FacetTerm:
     return FacetTerm(h.T, boundary, f0, g0)
 
 
+def water_flux_term(T: str, fluid_rho_c: float, boundary: str, outward_flux: Callable) -> FacetTerm:
+    """The enthalpy of the water that a prescribed Darcy flux carries across
+    a boundary part without a temperature condition: int w rho_f C_f q_n T,
+    q_n = ``outward_flux(ctx)`` (m/s, (nc, nq)); the water leaves, or enters,
+    at the boundary's own temperature.  The advection of the flow's
+    conservative form has no boundary term (its natural condition is no
+    flow): without this term the water would cross the boundary without
+    its energy.  T in kelvin, as the advection's (no reference temperature
+    with a flow)."""
+    def f0(ctx):
+        return fluid_rho_c * outward_flux(ctx)[..., None] * ctx.value(T)
+
+    def g0(ctx):
+        return fluid_rho_c * outward_flux(ctx)[..., None, None]
+    return FacetTerm(T, boundary, f0, g0)
+
+
 def neumann(name: str, boundary: str, inflow: PointFunction) -> FacetTerm:
     """Prescribed conductive heat inflow q_N (W/m2) through a boundary part."""
     def f0(ctx):
