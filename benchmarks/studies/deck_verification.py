@@ -118,6 +118,8 @@ def fracture_rows(out) -> list:
     lowest, highest, last = fractured.flux_outflow_temperatures(out / "outflow", crossing)
     rows.append(("water drawn out through a flux boundary, its temperature free", "Tm lowest, highest over "
                  "the steps; highest at the end (degC)", f"{lowest:.6g}, {highest:.6g}; {last:.6g}"))
+    rows += [("a well crossing two fractures (1 mm, 0.5 mm), closed rock, 3D P1", what, value)
+             for what, value in fractured.well_split(out / "split").items()]
     return rows
 
 

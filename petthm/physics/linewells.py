@@ -29,7 +29,12 @@ node's share of the well's length (half of each segment beside it; 1 m in
 principal values in the plane normal to it; in 2D sqrt(det k)), averaged
 over the cells at the node, r_e = 0.2 h (h the mean length of the mesh
 edges at the node, r_e floored at 2 r_w) and mu at the node's initial
-temperature.
+temperature.  A node where the well crosses a fracture (whose pressure
+is the rock's there: the walls are tied to it) adds the fracture's index,
+2 pi T / ln(r_e / r_w) with T = a^3 / (12 mu) (``fracture_well_index``),
+so that the well's rate splits among the fractures it crosses by their
+transmissivities; a well of fractures alone (no rock pressure) has that
+index alone, in the fracture's pressure and temperature.
 """
 from __future__ import annotations
 
@@ -66,6 +71,7 @@ class LineWell:
     rho_c: float = 0.0              # rho_f C_f; 0: no heat
     p: str = "pm"
     T: str | None = "Tm"
+    fractures: tuple = ()           # the fracture each node is on ("": the rock), for the rates per fracture
 
 
 def well_index(k_perp, length, h, well_radius: float, mu) -> np.ndarray:
@@ -73,6 +79,20 @@ def well_index(k_perp, length, h, well_radius: float, mu) -> np.ndarray:
     re = np.maximum(0.2 * np.asarray(h, dtype=float), 2.0 * well_radius)
     kl = np.asarray(k_perp) * np.asarray(length)
     return 2.0 * math.pi * kl / (np.asarray(mu) * np.log(re / well_radius))
+
+
+def fracture_well_index(transmissivity, h, well_radius: float, flow_dim: int) -> np.ndarray:
+    """The index of a well node on a fracture of ``transmissivity`` a^3 /
+    (12 mu) (m3/(Pa s), arrays): where a well crosses a fracture (flow_dim
+    2, 3D) the fracture's radial inflow 2 pi T / ln(r_e / r_w), r_e as
+    ``well_index``; where a well normal to a 2D section lies in a fracture
+    (flow_dim 1), 2 T / r_w, the node reached from both sides over r_w (as
+    the paper's scenes' wells, ``kernels.wells.well_index``)."""
+    T = np.asarray(transmissivity, dtype=float)
+    if flow_dim == 1:
+        return 2.0 * T / well_radius
+    re = np.maximum(0.2 * np.asarray(h, dtype=float), 2.0 * well_radius)
+    return 2.0 * math.pi * T / np.log(re / well_radius)
 
 
 def permeability_across(K: np.ndarray, direction: np.ndarray | None) -> float:

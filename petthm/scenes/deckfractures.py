@@ -8,7 +8,7 @@ walls' heat exchange (``-thm_fracture_heat_exchange``).
 
 A deck's fractures are rigid: their aperture does not change.  The rock
 mechanics of a fractured deck (u with contact on the fractures) is refused
-with an error that says so."""
+with an error that says so.  Wells that cross fractures: ``deckwells.py``."""
 from __future__ import annotations
 
 import numpy as np

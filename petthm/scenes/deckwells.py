@@ -88,6 +88,12 @@ def history_columns(wells: dict) -> tuple:
                  for what in ("rate", "pressure", "temperature", "power"))
 
 
+def fracture_columns(w: lw.LineWell) -> dict:
+    """{fracture: its column of history.csv} of the fractures a well crosses:
+    the rate into each (m3/s), ``well_NAME_fracture_F_rate``."""
+    return {f: f"well_{w.name}_fracture_{f}_rate" for f in dict.fromkeys(w.fractures) if f}
+
+
 def schedule_times(wells: dict) -> list[float]:
     times = set()
     for v in wells.values():
@@ -105,61 +111,100 @@ def power_reference(p, wells: dict) -> float:
 
 
 def line_wells(scene, mesh, fields) -> list[lw.LineWell]:
-    """The ``LineWell`` of each of the scene's wells (collective)."""
+    """The ``LineWell`` of each of the scene's wells (collective).  A node on
+    a fracture connects to it too; a deck without pm takes wells whose
+    every node is on a fracture (in pf and Tf)."""
     from petthm.mesh.wellpaths import read_well_paths
     p, groups = scene.p, scene.groups
-    if "pm" not in fields:
-        raise InputError(f"option -thm_wells = {p.wells}: a well in the rock needs pm (its fields: "
-                         f"{', '.join(fields)})")
     wanted = [g for g in groups.points if g.name in scene.wells]
     paths = read_well_paths(scene.run.mesh_file, mesh.dim, wanted, groups.regions, mesh.dm.comm.tompi4py())
-    check_off_fractures(mesh, paths)
-    K = [scene.permeability(name, mesh.dim) for name in scene.rocks]
+    crossings = fracture_of_nodes(scene, mesh, paths)
+    rock = "pm" in fields
+    K = [scene.permeability(name, mesh.dim) for name in scene.rocks] if rock else None
     heat = "Tm" in fields
     out = []
-    for path in paths:
+    for path, on in zip(paths, crossings, strict=True):
+        if not rock and np.any(on < 0):
+            raise InputError(f"option -thm_wells = {p.wells}: a well in the rock needs pm (its fields: "
+                             f"{', '.join(fields)}; well {path.name} has nodes off the fractures)")
+        check_crossings(scene, path, on, mesh.dim)
         c = control(path.name, scene.wells[path.name], p)
         if heat and c.rate is not None and max(c.rate.values) > 0 and c.temperature is None:
             raise InputError(f"well {path.name} injects (-thm_well_{path.name}_rate > 0): give "
                              f"-thm_well_{path.name}_temperature")
-        out.append(_line_well(scene, path, c, K, heat))
+        out.append(_line_well(scene, path, c, K, heat, on, mesh.dim))
     return out
 
 
-def check_off_fractures(mesh, paths) -> None:
-    """A well with a node on a fracture is refused: wells on or crossing
-    fractures are not part of a deck yet (collective)."""
-    if mesh.fracture is None:
-        return
+def fracture_of_nodes(scene, mesh, paths) -> list[np.ndarray]:
+    """For each well path, the index of the fracture (in the order of
+    -thm_fractures) that each node lies on, -1 in the rock (collective)."""
+    from mpi4py import MPI
     from scipy.spatial import cKDTree
-    x = mesh.vertex_coords[np.unique(mesh.fracture.cell_vertices)]
-    tree = cKDTree(x) if len(x) else None
-    tolerance = 1e-9 * float(np.max(mesh.vertex_coords.max(axis=0) - mesh.vertex_coords.min(axis=0)))
-    found = None
-    for path in paths:
-        if tree is not None and found is None:
-            d, _ = tree.query(path.points)
-            if np.any(d <= tolerance):
-                k = int(np.argmin(d))
-                found = (path.name, ", ".join(f"{c:.6g}" for c in path.points[k]))
-    found = next((f for f in mesh.dm.comm.tompi4py().allgather(found) if f), None)
-    if found:
-        raise InputError(f"well {found[0]} meets a fracture at ({found[1]}): wells on or crossing fractures "
-                         "are not part of a deck yet")
+
+    from petthm.scenes import deckfractures as df
+    out = [np.full(len(path.points), -1) for path in paths]
+    if mesh.fracture is None:
+        return out
+    fr = mesh.fracture
+    regions = df.fracture_regions(mesh, len(scene.fractures))
+    face_fracture = regions if regions is not None else np.zeros(fr.ncells, dtype=int)
+    x = mesh.vertex_coords[fr.cell_vertices.ravel()]
+    which = np.repeat(face_fracture, fr.cell_vertices.shape[1])
+    comm = mesh.dm.comm.tompi4py()
+    tolerance = 1e-9 * max(float(mesh.h.max()) if mesh.ncells else 1.0, 1e-300)
+    for k, path in enumerate(paths):
+        if len(x):
+            d, j = cKDTree(x).query(path.points, distance_upper_bound=tolerance)
+            hit = np.isfinite(d)
+            out[k][hit] = which[j[hit]]
+        mine = out[k].astype(np.int64)
+        comm.Allreduce(mine.copy(), mine, op=MPI.MAX)
+        out[k] = mine
+    return out
 
 
-def _line_well(scene, path, c: Control, K, heat: bool) -> lw.LineWell:
+def check_crossings(scene, path, on: np.ndarray, dim: int) -> None:
+    """A 3D well meets each fracture at one node at most (it crosses it): a
+    well that runs inside a fracture is not part of a deck yet."""
+    if dim != 3:
+        return
+    names = list(scene.fractures)
+    for k in np.unique(on[on >= 0]):
+        nodes = np.flatnonzero(on == k)
+        if len(nodes) > 1:
+            a, b = (", ".join(f"{c:.6g}" for c in path.points[i]) for i in nodes[:2])
+            raise InputError(f"well {path.name} runs inside fracture {names[k]} (its nodes at ({a}) and "
+                             f"({b})): a well along a fracture is not part of a deck yet; a well may cross "
+                             "fractures")
+
+
+def _line_well(scene, path, c: Control, K, heat: bool, on: np.ndarray, dim: int) -> lw.LineWell:
+    """The well of ``path``: each node's index the rock's (Peaceman; none
+    without pm) plus, on a fracture, the fracture's
+    (``linewells.fracture_well_index``)."""
     p = scene.p
-    across = np.array([[lw.permeability_across(k, None if path.direction is None else path.direction[i])
-                        for k in K] for i in range(len(path.points))])
-    k_perp = np.sum(path.regions * across, axis=1)
-    mu = np.broadcast_to(p.fluid_viscosity.mu(scene.initial_temperature()(path.points)), k_perp.shape)
-    index = lw.well_index(k_perp, path.length, path.edge, c.radius, mu)
+    mu = np.broadcast_to(p.fluid_viscosity.mu(scene.initial_temperature()(path.points)), (len(path.points),))
+    index = np.zeros(len(path.points))
+    if K is not None:
+        across = np.array([[lw.permeability_across(k, None if path.direction is None else path.direction[i])
+                            for k in K] for i in range(len(path.points))])
+        k_perp = np.sum(path.regions * across, axis=1)
+        index = lw.well_index(k_perp, path.length, path.edge, c.radius, mu)
+    crossing = on >= 0
+    if crossing.any():
+        apertures = np.array([q.fracture_aperture for q in scene.fractures.values()])
+        transmissivity = apertures[on[crossing]] ** 3 / (12 * mu[crossing])
+        index = index + np.bincount(np.flatnonzero(crossing), lw.fracture_well_index(
+            transmissivity, path.edge[crossing], c.radius, dim - 1), minlength=len(index))
     z = path.points[:, -1]
     head = p.fluid_density * p.gravity * (z.max() - z)
+    fields = ("pm", "Tm") if K is not None else ("pf", "Tf")
+    names = tuple(scene.fractures)
     return lw.LineWell(path.name, path.points, index, head, rate=c.rate, pressure=c.pressure,
                        temperature=None if c.temperature is None else c.temperature + CELSIUS,
-                       rho_c=p.fluid_rho_c if heat else 0.0, T="Tm" if heat else None)
+                       rho_c=p.fluid_rho_c if heat else 0.0, p=fields[0], T=fields[1] if heat else None,
+                       fractures=tuple(names[k] if k >= 0 else "" for k in on))
 
 
 def not_liquid(name: str, columns: dict, t: float) -> str | None:
@@ -194,6 +239,11 @@ def well_columns(problem, w: lw.LineWell, t: float, X, power_reference: float) -
     name = f"well_{w.name}"
     row = {f"{name}_rate": Q, f"{name}_pressure": s.pressure, f"{name}_temperature": float("nan"),
            f"{name}_power": 0.0}
+    crossed = fracture_columns(w)
+    if crossed:
+        on = np.asarray(w.fractures)[ctx.owned]
+        rates = ctx.total([s.q[on == f].sum() for f in crossed])
+        row.update({column: float(q) for column, q in zip(crossed.values(), rates, strict=True)})
     if w.T is None:
         return row
     if Q > 0 and w.temperature is not None:

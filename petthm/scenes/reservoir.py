@@ -36,8 +36,9 @@ What a deck holds here:
   fracture flow pf and heat Tf at a fixed aperture each, leakoff (pm = pf
   on the walls) and the walls' heat exchange (``deckfractures.py``); a
   held pressure or temperature holds pf or Tf where a fracture reaches the
-  boundary (``deckbc.py``).  A fractured deck's rock mechanics is refused
-  with an error that says so.
+  boundary (``deckbc.py``); a well may cross fractures, connected to each
+  at the crossing (``deckwells.py``).  A fractured deck's rock mechanics is
+  refused with an error that says so.
 """
 from __future__ import annotations
 
@@ -329,6 +330,7 @@ class Reservoir(DeckBoundaries, Scene):
         if self.wells:
             self.line_wells = dw.line_wells(self, mesh, fields)
             b.model.node_sets.extend(well_term(w) for w in self.line_wells)
+            self.history_columns += tuple(c for w in self.line_wells for c in dw.fracture_columns(w).values())
         model = b.build()
         if len(set(map(rock_values, self.rocks.values()))) > 1:
             model.cell_regions = self.cell_regions(mesh)

@@ -171,9 +171,11 @@ def test_the_geometry_tool_writes_a_mesh_and_a_starter_deck(tmp_path):
 
 @pytest.fixture(scope="module")
 def fracbox(tmp_path_factory):
-    """A box with a square fracture 'crack' at 150 m depth and a well 'w' through it."""
+    """A box with a square fracture 'crack' at 150 m depth, a well 'w' through
+    it and a well 'along' inside it."""
     return layered_deck_box(str(tmp_path_factory.mktemp("deckfrac") / "fb.msh"), [0, 0, -300], [300, 300, 0],
-                            150, wells=[("w", [(150, 150, -250), (150, 150, -50)])],
+                            150, wells=[("w", [(150, 150, -250), (150, 150, -50)]),
+                                        ("along", [(100, 150, -150), (200, 150, -150)])],
                             fractures=[("crack", [(75, 75, -150), (225, 75, -150), (225, 225, -150),
                                                   (75, 225, -150)])])
 
@@ -195,8 +197,10 @@ FLOW_HEAT = ("-thm_fields", "pm,pf,Tm,Tf")
      ("-thm_fracture_crack_aperture = -1",)),
     (("-thm_fractures", "crack", "-thm_bc_crack_pressure", 0, *FLOW_HEAT),
      ("-thm_bc_crack_pressure", "crack is a fracture", "not a boundary")),
-    (("-thm_fractures", "crack", "-thm_wells", "w", "-thm_well_w_pressure", 1e6, *FLOW_HEAT),
-     ("well w meets a fracture at (150, 150, -150)", "not part of a deck yet")),
+    (("-thm_fractures", "crack", "-thm_wells", "along", "-thm_well_along_pressure", 1e6, *FLOW_HEAT),
+     ("well along runs inside fracture crack", "a well along a fracture is not part of a deck yet")),
+    (("-thm_fractures", "crack", "-thm_wells", "w", "-thm_well_w_pressure", 1e6, "-thm_fields", "pf,Tm,Tf"),
+     ("-thm_wells = w", "a well in the rock needs pm", "well w has nodes off the fractures")),
 ])
 def test_a_bad_fracture_is_one_line_naming_what_is_wrong(tmp_path, fracbox, options, words):
     msg = _error(tmp_path, "-thm_mesh_file", fracbox, *options)

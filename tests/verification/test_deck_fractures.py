@@ -222,3 +222,50 @@ def test_the_jacobian_of_a_fractured_deck_matches_finite_differences(tmp_path):
     problem.J = None
     errs = jacobian_fd_block_errors(problem, t=1e5, shift=1e-4, eps=1e-6, rate=1e-4)
     assert max(errs.values()) > 1e-4, errs
+
+
+def crossing_rates(outdir, mesh, *options, ranks=1) -> dict:
+    """{column: value} of the last row of a vertical well crossing the
+    fractures 'upper' and 'lower' of a box of (nearly) impermeable rock
+    whose sides are held at p = 0 (flow only), in steady state."""
+    sides = [a for face in ("west", "east", "south", "north") for a in (f"-thm_bc_{face}_pressure", 0)]
+    _, s = run_petthm("reservoir", outdir, "-thm_mesh_file", mesh, "-thm_fractures", "upper,lower",
+                      "-thm_fields", "pm,pf", "-thm_rock_permeability", 1e-22, "-thm_wells", "inj", *sides,
+                      *P1, *options, "-thm_dt_initial", 1, "-thm_final_time", 1000, ranks=ranks)
+    assert s["status"] == "completed"
+    return {k: float(v) for k, v in history(outdir)[-1].items() if k.startswith("well_")}
+
+
+def well_split(outdir) -> dict:
+    """A well held at 1 MPa crossing two fractures of 1 mm (A), and of 1 mm
+    above 0.5 mm (C); C under rate control at 0.1 m3/s (R), on 1 and 2 ranks.
+    With the rock closed, each fracture takes a rate proportional to its
+    transmissivity a^3 / (12 mu) (its flow and its well index both are):
+    C's upper fracture takes A's, its lower one (1/2)^3 of A's; R splits
+    0.1 m3/s in C's proportions."""
+    outdir.mkdir(parents=True, exist_ok=True)
+
+    def square(z):
+        return [(0, 0, z), (200, 0, z), (200, 200, z), (0, 200, z)]
+    mesh = layered_deck_box(str(outdir / "crossed.msh"), [0, 0, -200], [200, 200, 0], 40,
+                            wells=[("inj", [(100, 100, -180), (100, 100, -20)])],
+                            fractures=[("upper", square(-60)), ("lower", square(-140))])
+    A = crossing_rates(outdir / "A", mesh, "-thm_well_inj_pressure", 1e6)
+    C = crossing_rates(outdir / "C", mesh, "-thm_well_inj_pressure", 1e6,
+                       "-thm_fracture_lower_aperture", 5e-4)
+    R = crossing_rates(outdir / "R", mesh, "-thm_well_inj_rate", 0.1, "-thm_fracture_lower_aperture", 5e-4)
+    R2 = crossing_rates(outdir / "R2", mesh, "-thm_well_inj_rate", 0.1, "-thm_fracture_lower_aperture", 5e-4,
+                        ranks=2)
+    up, low = "well_inj_fracture_upper_rate", "well_inj_fracture_lower_rate"
+    return {"upper: C / A - 1": C[up] / A[up] - 1,
+            "lower: C / A / (1/2)^3 - 1": C[low] / A[low] * 8 - 1,
+            "rate control: (upper + lower) / 0.1 - 1": (R[up] + R[low]) / 0.1 - 1,
+            "rate control: upper / lower over C's - 1": (R[up] / R[low]) / (C[up] / C[low]) - 1,
+            "2 ranks against 1: the rates' largest relative difference":
+                max(abs(R2[k] - R[k]) / abs(R[k]) for k in (up, low, "well_inj_pressure"))}
+
+
+def test_a_well_crossing_two_fractures_splits_its_rate_by_their_transmissivities(tmp_path):
+    split = well_split(tmp_path)
+    print(split)
+    assert all(abs(v) < 1e-6 for v in split.values()), split
