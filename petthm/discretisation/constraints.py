@@ -35,6 +35,7 @@ class Dirichlet:
     value: BoundaryFunction
     rate: BoundaryFunction | None = None   # d value / dt (default 0)
     components: tuple | None = None        # constrained components of a vector field (None: all)
+    steady: bool = False                   # the value does not change in time: evaluated once
 
     def entry(self):
         """The boundary entry of ``fields.Discretisation``."""
@@ -57,6 +58,7 @@ class Constraints:
         self.dirichlet = list(dirichlet)
         byname = {(d.field, d.boundary, d.components): d for d in dirichlet}
         self.bc = []                           # (Dirichlet, fields.DirichletDofs)
+        self._steady_values: dict[int, np.ndarray] = {}     # the values of steady conditions, per dofs
         for dd in disc.dirichlet:
             d = byname.get((dd.source or dd.field, dd.boundary, dd.components))
             if d is not None:
@@ -93,7 +95,11 @@ class Constraints:
                 continue
             sc = scales[dofs.field]
             shape = dofs.dofs.shape
-            vals = np.asarray(d.value(dofs.coords, t), dtype=float).reshape(shape)
+            vals = self._steady_values.get(id(dofs)) if d.steady else None
+            if vals is None:
+                vals = np.asarray(d.value(dofs.coords, t), dtype=float).reshape(shape)
+                if d.steady:
+                    self._steady_values[id(dofs)] = vals
             xl[dofs.dofs] = (vals - sc.offset) / sc.scale
             rate = 0.0 if d.rate is None else \
                 np.asarray(d.rate(dofs.coords, t), dtype=float).reshape(shape) / sc.scale

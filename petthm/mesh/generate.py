@@ -140,10 +140,12 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     """Box (or rectangle) ``origin + [0, lengths]`` with embedded fractures; the
     mesh conforms to them.
 
-    Physical groups: the domain (cells, tag 1), its outer boundary (facets,
-    ``BOUNDARY_TAG``), fracture ``i`` (facets, ``FRACTURE_TAG0 + i``), its tip
-    (the fracture's edges, or end points in 2D, inside the domain,
-    ``TIP_TAG0 + i``) and well ``i`` (a point, ``WELL_TAG0 + i``).
+    Physical groups: the domain (cells, tag 1, named "rock"), its outer
+    boundary (facets, ``BOUNDARY_TAG``, "boundary"), fracture ``i`` (facets,
+    ``FRACTURE_TAG0 + i``, "fracture<i>"), its tip (the fracture's edges, or
+    end points in 2D, inside the domain, ``TIP_TAG0 + i``, "tip<i>") and well
+    ``i`` (a point, ``WELL_TAG0 + i``, "well<i>"): the names let a deck run
+    on the mesh (``reservoir``; manual: the paper's scenes as decks).
     With ``grading_distance`` > 0 the size grows
     linearly from each fracture's ``size`` to ``size`` over that distance.
     ``wells``: points (on a fracture) that become mesh vertices, with mesh
@@ -170,7 +172,7 @@ def box_with_fractures(path: str, lengths: Sequence[float], size: float,
     _embed_curves(gmsh, dim, [t for m in line_maps for (d, t) in m if d == 1],
                   [t for (d, t) in mapping[0] if d == dim])
     for i, m in enumerate(mapping[1 + len(fractures):1 + len(fractures) + len(wells)]):
-        gmsh.model.addPhysicalGroup(0, [t for (d, t) in m if d == 0], WELL_TAG0 + i)
+        gmsh.model.addPhysicalGroup(0, [t for (d, t) in m if d == 0], WELL_TAG0 + i, name=f"well{i}")
     fine = [f.size or size for f in fractures] + ([well_size] if (wells or well_lines) and well_size else [])
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     gmsh.option.setNumber("Mesh.MeshSizeMin", min(fine))
@@ -232,7 +234,7 @@ def tag_well_points(gmsh, wells: Sequence[tuple], tol: float) -> list[int]:
     for i, w in enumerate(wells):
         w = np.array(tuple(w) + (0.0,) * (3 - len(w)), dtype=float)
         near = [t for (t, x) in points if np.linalg.norm(x - w) < tol]
-        gmsh.model.addPhysicalGroup(0, near, WELL_TAG0 + i)
+        gmsh.model.addPhysicalGroup(0, near, WELL_TAG0 + i, name=f"well{i}")
         tags += near
     return tags
 
@@ -357,20 +359,20 @@ def _tag_domain(gmsh, dim: int, cells: list) -> set:
     """Physical groups of the domain's cells (tag 1) and of its outer boundary
     (``BOUNDARY_TAG``).  Returns the entities that bound the outer boundary:
     a fracture's rim there is not a tip."""
-    gmsh.model.addPhysicalGroup(dim, cells, 1)
+    gmsh.model.addPhysicalGroup(dim, cells, 1, name="rock")
     outer = gmsh.model.getBoundary([(dim, c) for c in cells], combined=True, oriented=False)
-    gmsh.model.addPhysicalGroup(dim - 1, [t for (_, t) in outer], BOUNDARY_TAG)
+    gmsh.model.addPhysicalGroup(dim - 1, [t for (_, t) in outer], BOUNDARY_TAG, name="boundary")
     return {t for (_, t) in gmsh.model.getBoundary(outer, combined=False, oriented=False)}
 
 
 def _tag_fracture(gmsh, dim: int, i: int, ents: list, on_outer: set) -> None:
     """Physical groups of fracture ``i``: its facets (``FRACTURE_TAG0 + i``) and
     its tip (``TIP_TAG0 + i``), the part of its rim inside the domain."""
-    gmsh.model.addPhysicalGroup(dim - 1, ents, FRACTURE_TAG0 + i)
+    gmsh.model.addPhysicalGroup(dim - 1, ents, FRACTURE_TAG0 + i, name=f"fracture{i}")
     rim = gmsh.model.getBoundary([(dim - 1, e) for e in ents], combined=True, oriented=False)
     tip = [t for (_, t) in rim if t not in on_outer]
     if tip:
-        gmsh.model.addPhysicalGroup(dim - 2, tip, TIP_TAG0 + i)
+        gmsh.model.addPhysicalGroup(dim - 2, tip, TIP_TAG0 + i, name=f"tip{i}")
 
 
 def _background_size(gmsh, fields: list) -> None:

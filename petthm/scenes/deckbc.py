@@ -84,17 +84,17 @@ class DeckBoundaries:
         dim, label = mesh.dim, name
         if suffix == "displacement":
             parts = vector_expressions(text, option, dim)
-            return Dirichlet("u", label, lambda x, t: np.stack([e(x) for e in parts], axis=1))
+            return Dirichlet("u", label, lambda x, t: np.stack([e(x) for e in parts], axis=1), steady=True)
         if suffix == "traction" or suffix == "normal_stress":
             return self.load(label, suffix, text, option, dim)
         e = Expression(text, option, dim)
         if suffix == "pressure":
-            return Dirichlet("pm", label, lambda x, t: e(x))
+            return Dirichlet("pm", label, lambda x, t: e(x), steady=True)
         if suffix == "temperature":
-            return Dirichlet("Tm", label, lambda x, t: e(x) + CELSIUS)
+            return Dirichlet("Tm", label, lambda x, t: e(x) + CELSIUS, steady=True)
         if suffix == "normal_displacement":
             axis, sign = self.face_axis(mesh, label, name, option)
-            return Dirichlet("u", label, lambda x, t: sign * e(x), components=(axis,))
+            return Dirichlet("u", label, lambda x, t: sign * e(x), components=(axis,), steady=True)
         kind = "pm" if suffix == "flux" else "Tm"
         return FacetTerm(kind, label, lambda ctx: _at_facets(e, ctx)[..., None])
 

@@ -24,6 +24,7 @@ class DeckMonitor(Monitor):
         self.fixed = dict(fixed or {})
         self.wells, self.power_reference = list(wells), power_reference
         self.warned: set[str] = set()
+        self._initial_values = {}
         self.last = {}
 
     def __call__(self, problem, t, X=None):
@@ -34,13 +35,27 @@ class DeckMonitor(Monitor):
             out["u_max"] = probes.global_max(problem.dm.comm, size, empty=0.0)
         for name in ("pm", "pf", "Tm", "Tf"):
             if name in self.fields:
-                out[f"{name}_change_max"] = probes.max_nodal_error(problem, name, self.initial[name], X, t)
+                out[f"{name}_change_max"] = probes.max_nodal_error(problem, name, self.initial_at(name), X, t)
         for w in self.wells:
             columns = dw.well_columns(problem, w, t, X, self.power_reference)
             out.update(columns)
             self.check_water(problem, w, t, columns)
         self.last = out
         return out
+
+    def initial_at(self, name: str):
+        """The initial value of field ``name`` at its nodes, evaluated once
+        (the nodes do not move; a deck's initial state is an expression)."""
+        if name not in self._initial_values:
+            initial = self.initial[name]
+            cache = {}
+
+            def at(x):
+                if "x" not in cache or cache["x"] is not x:
+                    cache["x"], cache["v"] = x, initial(x)
+                return cache["v"]
+            self._initial_values[name] = at
+        return self._initial_values[name]
 
     def check_water(self, problem, w, t: float, columns: dict) -> None:
         """Once per well, a warning where its bottom-hole pressure leaves

@@ -137,7 +137,7 @@ class RigidFracture(Scene):
                                                     p.scene1_layer_growth, 0.5 * M)
         fr = [meshing.Fracture("segment", p0=(0.0, 0.0), p1=(L, 0.0), size=p.scene1_fracture_size)]
         return meshing.box_with_fractures(path, [L + 2 * M, 2 * M], size, fr, grading_distance=0.5 * M,
-                                          origin=(-M, -M))
+                                          origin=(-M, -M), wells=self.wells_at())
 
     def wells_at(self):
         return (0.0, 0.0), (self.p.scene1_length, 0.0)
