@@ -5,7 +5,11 @@ wall time of each path, alternated (scene, deck, scene, deck, ...), with
 the medians and their ratio against the goal (the deck no more than 10 %
 slower).  Printed as the manual's table (the paper's scenes as decks).
 
-    python benchmarks/studies/paper_decks.py [--repeats 2] [--final-time 1e9] [--out DIR]
+    python benchmarks/studies/paper_decks.py [--repeats 3] [--final-time 1e8] [--out DIR]
+
+The end time is 1e8 s: the scene's steps land on 1e8 s (where it writes
+its profile), so beyond it the two paths take different steps and differ
+by the time discretisation's error, not the solver's.
 """
 from __future__ import annotations
 
@@ -28,8 +32,8 @@ GOAL_RATIO = 1.10
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=2, help="runs of each path for the wall times")
-    ap.add_argument("--final-time", type=float, default=1e9, help="end time (s)")
+    ap.add_argument("--repeats", type=int, default=3, help="runs of each path for the wall times")
+    ap.add_argument("--final-time", type=float, default=1e8, help="end time (s)")
     ap.add_argument("--out", default="", help="folder of the runs (default: a temporary one)")
     args = ap.parse_args()
     out = pathlib.Path(args.out or tempfile.mkdtemp(prefix="paperdecks"))
@@ -45,10 +49,10 @@ def main() -> None:
     for k in range(args.repeats):
         _, s = run_petthm("rigid_fracture", out / f"scene{k}", "-options_file",
                           f"{ROOT}/options/scenes/rigid_fracture.opts", "-thm_mesh_file", mesh, *final)
-        walls["scene"].append(s["wall_time"])
+        walls["scene"].append(s["wall_time"]["total"])
         _, d = run_petthm("reservoir", out / f"deck{k}", "-options_file", f"{ROOT}/options/decks/scene1.opts",
                           "-thm_mesh_file", mesh, *final)
-        walls["deck"].append(d["wall_time"])
+        walls["deck"].append(d["wall_time"]["total"])
     a, b = statistics.median(walls["scene"]), statistics.median(walls["deck"])
     print(f"\nwall time (median of {args.repeats}, alternated): scene {a:.2f} s, deck {b:.2f} s, "
           f"deck / scene {b / a:.3f} (goal <= {GOAL_RATIO:.2f})")

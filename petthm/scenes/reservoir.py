@@ -481,7 +481,7 @@ class Reservoir(DeckBoundaries, Scene):
         plo, phi = probes.global_min(comm, p0), probes.global_max(comm, p0)
         dp = max(phi - plo, p.fluid_density * p.gravity * extent, 1e5)
         out = {"Tm": FieldScale(dT, 0.5 * (Tr.upper + Tr.lower)), "pm": FieldScale(dp, 0.5 * (plo + phi))}
-        out["Tf"], out["pf"] = out["Tm"], out["pm"]
+        out["Tf"], out["pf"] = FieldScale(dT, 0.5 * (Tr.upper + Tr.lower)), FieldScale(dp, 0.5 * (plo + phi))
         strains = [max(q.rock_thermal_expansion * dT / 3, q.rock_biot_coefficient * dp / q.bulk_modulus)
                    for q in self.rocks.values()]
         strain = max(strains + [1e-6])
