@@ -52,6 +52,9 @@ def layered_deck_box(path: str, lower: Sequence[float], upper: Sequence[float], 
     first = len(cells) - 1
     _name_pieces(gmsh, dim - 2, wells, tools, mapping[1:], first)
     _name_pieces(gmsh, dim - 1, fractures, tools, mapping[1:], first + len(wells))
+    if dim == 3 and wells and fractures:
+        pieces = sum(len(tools[first + j]) for j in range(len(wells)))
+        _embed_well_curves(gmsh, mapping[1 + first:1 + first + pieces])
     gmsh.option.setNumber("Mesh.MeshSizeMin", size)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     return _write(gmsh, dim, path, place=None if not rotation else lambda g: _rotate_nodes(g, dim, rotation))
@@ -115,6 +118,28 @@ def _name_pieces(gmsh, edim: int, named, tools, pieces, first: int) -> None:
         ents = sorted({e[1] for i, piece in enumerate(pieces) if owner[i] == first + j for e in piece
                        if e[0] == edim})
         model.addPhysicalGroup(edim, ents, start + j, name=name)
+
+
+def _embed_well_curves(gmsh, pieces) -> None:
+    """Embed the wells' curves that run through the rock in the volume around
+    them: OCC's fragment embeds a curve in a volume by itself only where no
+    surface (a fracture) is embedded there too.  A curve in a fracture's
+    plane stays the fracture's."""
+    model = gmsh.model
+    on_surfaces = {t for _, s in model.getEntities(2) for d, t in model.mesh.getEmbedded(2, s) if d == 1}
+    on_surfaces |= {t for _, t in model.getBoundary(model.getEntities(2), combined=False, oriented=False)}
+    curves = sorted({t for piece in pieces for d, t in piece if d == 1} - on_surfaces)
+    by_volume: dict[int, list] = {}
+    for c in curves:
+        lo, hi = model.getParametrizationBounds(1, c)
+        mid = np.asarray(model.getValue(1, c, [0.5 * (lo[0] + hi[0])]))
+        for _, v in model.getEntities(3):
+            box = np.asarray(model.getBoundingBox(3, v))
+            if np.all(mid >= box[:3]) and np.all(mid <= box[3:]):       # a deck box's volumes are boxes
+                by_volume.setdefault(v, []).append(c)
+                break
+    for v, cs in by_volume.items():
+        model.mesh.embed(1, cs, 3, v)
 
 
 def _rotate_nodes(gmsh, dim: int, degrees: float) -> None:
