@@ -15,7 +15,7 @@ from petthm.discretisation.model import FacetTerm
 from petthm.errors import InputError
 from petthm.expressions import Expression
 from petthm.params import CELSIUS
-from petthm.physics.kernels.heat import water_flux_term
+from petthm.physics.kernels.heatboundary import water_flux_term
 from petthm.scenes.deckinput import BC_FIELD, BC_SUFFIXES, corners, insitu_tensor, vector_expressions
 
 #: the fracture field a held pressure or temperature holds too, where a fracture reaches the boundary
@@ -56,7 +56,7 @@ class DeckBoundaries:
 
     def carried_heat(self, mesh, name: str, text: str, option: str):
         """The heat of the water that a boundary's prescribed flux carries
-        across it (``heat.water_flux_term``)."""
+        across it (``heatboundary.water_flux_term``)."""
         e = Expression(text, option, mesh.dim)
         return water_flux_term("Tm", self.p.fluid_rho_c, name, lambda ctx: _at_facets(e, ctx))
 

@@ -7,7 +7,7 @@ conservative form with SUPG).
   advection velocity; affine in t, so backward Euler adds no time error and
   the reported L2/H1 errors are purely spatial.  The Neumann and Robin sides
   are outflow sides: the fluid carries its enthalpy out there
-  (``heat.outflow_term``) and q_N, h (T - T_ext) are the conductive
+  (``heatboundary.outflow_term``) and q_N, h (T - T_ext) are the conductive
   fluxes.
 * ``heat_erfc``: 1D conduction into a half-space after a step change of the
   surface temperature, T = T0 + (Ts - T0) erfc(z / (2 sqrt(kappa t))), on a
@@ -29,7 +29,7 @@ from petthm.mesh import generate as meshing
 from petthm.params import CELSIUS, MESH, PHYSICS, param
 from petthm.physics import materials as mt
 from petthm.physics.builders import ModelBuilder
-from petthm.physics.kernels import heat as hk
+from petthm.physics.kernels import heatboundary as hb
 from petthm.scenes.base import Monitor, Scene, Setup, TimeDefaults, constant, constant_in_time, face
 from petthm.solvers.options import direct_solver_defaults
 
@@ -143,8 +143,8 @@ class HeatMMS(Scene):
             return self.exact(x, t) + lam * self.exact_grad(x, t)[..., 1] / h
 
         model = b.build()
-        model.facets += [hk.neumann(FIELD, "x1", inflow), hk.robin(FIELD, "y1", h, t_ext),
-                         hk.outflow_term(heat, "x1"), hk.outflow_term(heat, "y1")]
+        model.facets += [hb.neumann(FIELD, "x1", inflow), hb.robin(FIELD, "y1", h, t_ext),
+                         hb.outflow_term(heat, "x1"), hb.outflow_term(heat, "y1")]
         dir_parts = ["x0", "y0"] + (["z0", "z1"] if p.mms_dim == 3 else [])
         rate = lambda x, t: p.mms_amplitude / self.t_ref * self._g(x)  # noqa: E731
         dirichlet = [Dirichlet(FIELD, part, self.exact, rate) for part in dir_parts]
@@ -282,7 +282,7 @@ class HeatAdvection(Scene):
         b = ModelBuilder(p, mesh.dim)
         heat = b.matrix_heat(degree, velocity=self._velocity, reference_temperature=p.T0)
         model = b.build()
-        model.facets.append(hk.outflow_term(heat, "outlet"))
+        model.facets.append(hb.outflow_term(heat, "outlet"))
         Ti, T0 = p.T_inj, p.T0
         dirichlet = [Dirichlet(FIELD, "inlet", constant_in_time(Ti))]
         scales = {FIELD: FieldScale(scale=abs(T0 - Ti), offset=T0)}
