@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from petthm.mesh.generate import _start, _write
+from petthm.mesh.generate import _embed_curves, _start, _write
 
 #: the names of a deck box's faces: (axis, side) -> name (z up in 3D, y up in 2D)
 FACE_NAMES_3D = {(0, 0): "west", (0, 1): "east", (1, 0): "south", (1, 1): "north", (2, 0): "bottom",
@@ -129,17 +129,7 @@ def _embed_well_curves(gmsh, pieces) -> None:
     on_surfaces = {t for _, s in model.getEntities(2) for d, t in model.mesh.getEmbedded(2, s) if d == 1}
     on_surfaces |= {t for _, t in model.getBoundary(model.getEntities(2), combined=False, oriented=False)}
     curves = sorted({t for piece in pieces for d, t in piece if d == 1} - on_surfaces)
-    by_volume: dict[int, list] = {}
-    for c in curves:
-        lo, hi = model.getParametrizationBounds(1, c)
-        mid = np.asarray(model.getValue(1, c, [0.5 * (lo[0] + hi[0])]))
-        for _, v in model.getEntities(3):
-            box = np.asarray(model.getBoundingBox(3, v))
-            if np.all(mid >= box[:3]) and np.all(mid <= box[3:]):       # a deck box's volumes are boxes
-                by_volume.setdefault(v, []).append(c)
-                break
-    for v, cs in by_volume.items():
-        model.mesh.embed(1, cs, 3, v)
+    _embed_curves(gmsh, 3, curves, [t for _, t in model.getEntities(3)])
 
 
 def _rotate_nodes(gmsh, dim: int, degrees: float) -> None:

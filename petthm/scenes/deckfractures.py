@@ -63,7 +63,8 @@ def named_fracture_options(fractures) -> set[str]:
 def check_fracture_options(fractures_text: str, groups, fractures, known, options=None) -> None:
     """An input error for a -thm_fracture_NAME_* option of a group that is
     not a fracture, of a deformable fracture's value, or of a value a
-    fracture does not take (``known``: the global options, lower case)."""
+    fracture does not take (``known``: the global options, lower case); and
+    for a boundary condition -thm_bc_NAME_* on a fracture."""
     from petsc4py import PETSc
     opts = options or PETSc.Options()
     listed = {g.name.lower() for g in fractures}
@@ -71,6 +72,10 @@ def check_fracture_options(fractures_text: str, groups, fractures, known, option
     suffixes = [f[len(FRACTURE_STRIP):] for f in FRACTURE_FIELDS]
     for key in sorted(opts.getAll()):
         low = key.lower()
+        on = next((g.name for g in fractures if low.startswith(f"thm_bc_{g.name.lower()}_")), None)
+        if on:
+            raise InputError(f"option -{key}: {on} is a fracture (-thm_fractures), not a boundary; a "
+                             "pressure or temperature held on a boundary holds a fracture that reaches it")
         if not low.startswith("thm_fracture_") or low in known:
             continue
         if low.endswith(DEFORMABLE_SUFFIXES):

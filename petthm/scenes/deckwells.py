@@ -153,9 +153,10 @@ def fracture_of_nodes(scene, mesh, paths) -> list[np.ndarray]:
     which = np.repeat(face_fracture, fr.cell_vertices.shape[1])
     comm = mesh.dm.comm.tompi4py()
     tolerance = 1e-9 * max(float(mesh.h.max()) if mesh.ncells else 1.0, 1e-300)
+    tree = cKDTree(x) if len(x) else None
     for k, path in enumerate(paths):
-        if len(x):
-            d, j = cKDTree(x).query(path.points, distance_upper_bound=tolerance)
+        if tree is not None:
+            d, j = tree.query(path.points, distance_upper_bound=tolerance)
             hit = np.isfinite(d)
             out[k][hit] = which[j[hit]]
         mine = out[k].astype(np.int64)

@@ -97,7 +97,7 @@ class Reservoir(DeckBoundaries, Scene):
         mt.group("Initial state", ("initial_temperature", "initial_pressure", "insitu_stress"),
                  insitu_stress="0"),
         mt.group("Gravity", ("gravity",), gravity=0.0),
-        mt.group("Fracture", ("fracture_aperture", "fracture_heat_exchange",      # parameters[4]: named_help
+        mt.group("Fracture", ("fracture_aperture", "fracture_heat_exchange",
                               "fracture_supg_wall_conduction")),
         mt.group("Wells", ("well_radius",)),
         mt.group("Coupling", ("thermomechanical_heating",)),
@@ -115,7 +115,6 @@ class Reservoir(DeckBoundaries, Scene):
         self.fractures = df.fracture_values(p, self.fracture_groups)
         self.bc = {g.name: P.read_named(BoundaryValues(), BC_SUFFIXES, "bc", g.name)
                    for g in self.groups.boundaries if g not in self.fracture_groups}
-        self.check_no_fracture_conditions()
         #: the parameters of each region, in the order of the mesh's regions (-thm_region_NAME_rock_*)
         self.rocks = {g.name: P.read_named(p, REGION_FIELDS, "region", g.name) for g in self.groups.regions}
         #: the wells' controls (-thm_wells, -thm_well_NAME_*)
@@ -163,7 +162,7 @@ class Reservoir(DeckBoundaries, Scene):
                 if line.split()[0][len("-thm_"):] in REGION_FIELDS]
         fracture = ["  Fractures (named in -thm_fractures; default: the global value)"] + \
             [line.replace("-thm_fracture_", "-thm_fracture_<NAME>_", 1)
-             for line in P.help_text((cls.parameters[4],)).split("\n")[1:]
+             for line in P.help_text(cls.parameters).split("\n")[1:]
              if line.split()[0][len("-thm_"):] in df.FRACTURE_FIELDS]
         if not mesh_file:
             return "\n".join(["  Boundaries (give -thm_mesh_file F.msh to list them for its boundaries)"] +
@@ -193,16 +192,6 @@ class Reservoir(DeckBoundaries, Scene):
         are split (a deck's boundaries and regions keep their faces whatever
         their tags)."""
         return tuple(g.tag for g in self.fracture_groups)
-
-    def check_no_fracture_conditions(self) -> None:
-        """A fracture is no boundary: -thm_bc_NAME_* of a fracture is an error."""
-        from petsc4py import PETSc
-        for key in PETSc.Options().getAll():
-            for g in self.fracture_groups:
-                if key.lower().startswith(f"thm_bc_{g.name.lower()}_"):
-                    raise InputError(f"option -{key}: {g.name} is a fracture (-thm_fractures), not a "
-                                     "boundary; a pressure or temperature held on a boundary holds a "
-                                     "fracture that reaches it")
 
     def water_temperatures(self):
         """None before the mesh: a deck's temperatures are checked at the nodes (``check_water``)."""
